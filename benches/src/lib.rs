@@ -1,0 +1,1 @@
+//! Benchmarks for isoforge live in `benches/`; this library holds what they share.

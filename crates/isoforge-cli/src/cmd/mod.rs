@@ -1,0 +1,9 @@
+//! One module per subcommand.
+
+pub mod check;
+pub mod fake_printer;
+pub mod info;
+pub mod mesh;
+pub mod print;
+pub mod render;
+pub mod slice;

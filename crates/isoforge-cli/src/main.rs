@@ -1,0 +1,61 @@
+//! `isoforge`: from a model script to a watertight mesh, layer images, G-code, and a print.
+//!
+//! Exit status: 0 done, 1 the work failed (message on stderr), 2 a usage error.
+
+mod cmd;
+mod common;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use crate::common::Global;
+
+/// Turn math into printed objects.
+#[derive(Parser)]
+#[command(name = "isoforge", version, about, long_about = None)]
+struct Cli {
+    #[command(flatten)]
+    global: Global,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Mesh a model into a closed, manifold triangle mesh (STL, OBJ, PLY, 3MF).
+    Mesh(cmd::mesh::MeshArgs),
+    /// Draw a shaded picture of a model.
+    Render(cmd::render::RenderArgs),
+    /// Check a mesh file: closed, manifold, oriented; volume, area, bounds.
+    Check(cmd::check::CheckArgs),
+    /// Show a model's bounds, node count, tape length and parameters.
+    Info(cmd::info::InfoArgs),
+    /// Slice a model or mesh into G-code, SL1, SVX or layer PNGs.
+    Slice(cmd::slice::SliceArgs),
+    /// Stream G-code to a printer over a serial port.
+    Print(cmd::print::PrintArgs),
+    /// Run a simulated Marlin-style printer on a pseudo-terminal.
+    FakePrinter(cmd::fake_printer::FakePrinterArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let global = cli.global;
+    let result = match cli.command {
+        Command::Mesh(args) => cmd::mesh::run(args, &global),
+        Command::Render(args) => cmd::render::run(args, &global),
+        Command::Check(args) => cmd::check::run(args, &global),
+        Command::Info(args) => cmd::info::run(args, &global),
+        Command::Slice(args) => cmd::slice::run(args, &global),
+        Command::Print(args) => cmd::print::run(args, &global),
+        Command::FakePrinter(args) => cmd::fake_printer::run(args, &global),
+    };
+    match result {
+        Ok(code) => code,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            ExitCode::from(1)
+        }
+    }
+}

@@ -1,0 +1,7 @@
+//! Evaluators on a [`crate::Tape`].
+
+pub mod batch;
+pub mod grad;
+pub mod interval;
+pub mod point;
+pub mod scalar;
