@@ -97,6 +97,10 @@ impl Sim {
                     moved = true;
                 }
             }
+            if !moved && self.fw.step(self.now) {
+                // Only jump the clock when the firmware is idle too.
+                moved = true;
+            }
             if moved {
                 self.now += Duration::from_micros(20);
             } else {

@@ -1,18 +1,77 @@
-//! `isoforge fake-printer`.
+//! `isoforge fake-printer`: a simulated Marlin-style printer on a pseudo-terminal.
 
+use std::io::Write;
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Duration;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
+use isoforge_host::fake::{FakeConfig, FakePrinter, Faults, FirmwareConfig};
 
 use crate::common::Global;
 
 /// Arguments of `isoforge fake-printer`.
 #[derive(Args, Debug)]
-pub struct FakePrinterArgs {}
+#[command(
+    about = "Run a simulated Marlin-style printer on a pseudo-terminal",
+    long_about = "Starts a simulated Marlin-style printer on a pseudo-terminal and prints its device \
+path on the first line of stdout; point `isoforge print --port PATH` (or any host) at it. It \
+checks line numbers and checksums as Marlin does, has 4 command slots and a 128-byte receive \
+buffer (bytes beyond it are lost), answers `ok` after executing, heats with `echo:busy: \
+processing` during M109/M190, and reports temperatures (M105, M155). It serves until the host \
+disconnects or it is killed.\n\nExample:\n  isoforge fake-printer --faults corrupt=0.01,drop=0.005,seed=7 --log executed.tsv"
+)]
+pub struct FakePrinterArgs {
+    /// Limit the link to this baud rate's byte speed (10 bits a byte); default: no limit.
+    #[arg(long, value_name = "N")]
+    pub baud: Option<u32>,
+    /// Faults to inject, seeded and repeatable: comma-separated KEY=VALUE. Rates per line:
+    /// corrupt=P (a byte host->printer), corrupt-reply=P (a byte printer->host), drop=P (a
+    /// line lost), drop-ok=P, error=P (Error: without Resend), spurious-resend=P,
+    /// no-resend-ok=P (Resend without ok), busy=P. One-shot events after N executed
+    /// commands: reset-at=N, halt-at=N, silent-at=N. Modes: advanced-ok (ok N.. P.. B..).
+    /// seed=N. Example: corrupt=0.01,drop=0.005,reset-at=5000,seed=7
+    #[arg(long, value_name = "SPEC")]
+    pub faults: Option<String>,
+    /// Record every executed command to this file: `LINE<TAB>COMMAND` (`-` for unnumbered).
+    #[arg(long, value_name = "FILE")]
+    pub log: Option<PathBuf>,
+    /// Real seconds per simulated second of heating (heating runs at 40 °C a second).
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.05)]
+    pub heat_tick: f64,
+}
 
 /// Runs the command.
 pub fn run(args: FakePrinterArgs, global: &Global) -> Result<ExitCode> {
-    let _ = (args, global);
-    bail!("not built yet")
+    let faults = match &args.faults {
+        Some(spec) => Faults::parse(spec)?,
+        None => Faults::default(),
+    };
+    if !(0.0..=10.0).contains(&args.heat_tick) {
+        anyhow::bail!("--heat-tick {}: expected 0 to 10 seconds", args.heat_tick);
+    }
+    let printer = FakePrinter::spawn(FakeConfig {
+        firmware: FirmwareConfig {
+            faults,
+            heat_tick: Duration::from_secs_f64(args.heat_tick),
+            ..FirmwareConfig::default()
+        },
+        baud: args.baud,
+        exit_on_disconnect: true,
+        log: args.log.clone(),
+    })
+    .context("fake printer")?;
+    let mut out = std::io::stdout();
+    writeln!(out, "{}", printer.path())?;
+    out.flush()?;
+    if !global.quiet && !global.json {
+        eprintln!(
+            "fake printer on {}; try: isoforge print FILE.gcode --port {}",
+            printer.path(),
+            printer.path()
+        );
+    }
+    printer.wait().context("fake printer")?;
+    Ok(ExitCode::SUCCESS)
 }

@@ -1,18 +1,314 @@
-//! `isoforge print`.
+//! `isoforge print`: stream G-code to a printer over a serial port.
 
+use std::io::{BufRead, IsTerminal, Write};
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::mpsc;
+use std::time::Duration;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use isoforge_host::gcode;
+use isoforge_host::journal::{self, JournalRecord, Status};
+use isoforge_host::protocol::{Config, Event};
+use isoforge_host::state::MachineState;
+use isoforge_host::streamer::{self, Control, Job, Progress, Update};
 
-use crate::common::Global;
+use crate::common::{Global, print_json};
 
 /// Arguments of `isoforge print`.
 #[derive(Args, Debug)]
-pub struct PrintArgs {}
+#[command(
+    about = "Stream G-code to a printer over a serial port",
+    long_about = "Streams a G-code file to a RepRap/Marlin-style printer: comments stripped, each \
+line sent as `N<n> <command>*<checksum>` (lines over Marlin's 95 bytes are refused before \
+printing starts), up to --window commands and --rx-buffer bytes in flight (or the firmware's own \
+count with ADVANCED_OK), resend requests answered from a history, busy and heating waited through, \
+silence probed with M105 and reported, a board reset (`start`) or `Error:` stopping the job.\n\n\
+A progress bar shows percent, layer, Z, ETA and temperatures on a terminal. Ctrl-C pauses and asks \
+to resume or cancel (cancel stops sending, then heaters off M104 S0/M140 S0 and motors off M84; \
+--emergency sends M112 instead); when stdin is not a terminal Ctrl-C cancels.\n\n\
+The journal (FILE.journal unless --journal) records the last acknowledged line durably. After a \
+crash, cable pull or reset, `--resume` re-heats to the last targets, restores G90/G91 and M82/M83, \
+sets E with G92, lifts, homes X and Y, returns to the last position and continues from the first \
+line not known to be executed (or, with --from-layer N, from a layer start); it prints what it will \
+do first.\n\nTry it without a printer:\n  isoforge fake-printer &   # prints /dev/pts/N\n  isoforge \
+print part.gcode --port /dev/pts/N"
+)]
+pub struct PrintArgs {
+    /// The G-code file.
+    pub file: PathBuf,
+    /// The printer's serial port (/dev/ttyUSB0, /dev/ttyACM0, or a fake printer's pty).
+    #[arg(long, value_name = "PATH")]
+    pub port: String,
+    /// Baud rate.
+    #[arg(long, value_name = "N", default_value_t = 115_200)]
+    pub baud: u32,
+    /// The job journal (default: FILE.journal beside the G-code).
+    #[arg(long, value_name = "FILE")]
+    pub journal: Option<PathBuf>,
+    /// Keep no journal.
+    #[arg(long, conflicts_with_all = ["journal", "resume"])]
+    pub no_journal: bool,
+    /// Continue an interrupted job from its journal.
+    #[arg(long)]
+    pub resume: bool,
+    /// Resume from the start of this layer (`;LAYER:N`, else counted from the first
+    /// extruding Z), restoring the state the file had there.
+    #[arg(long, value_name = "N")]
+    pub from_layer: Option<u32>,
+    /// Commands in flight at most (1: ping-pong); stock Marlin has 4 slots.
+    #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u16).range(1..=64))]
+    pub window: u16,
+    /// Bytes in flight at most: the firmware's receive buffer minus one.
+    #[arg(long, value_name = "N", default_value_t = 127, value_parser = clap::value_parser!(u16).range(96..=65535))]
+    pub rx_buffer: u16,
+    /// On cancel, stop the printer at once with M112 (it then needs a reset).
+    #[arg(long)]
+    pub emergency: bool,
+    /// Seconds of silence before probing with M105 (commands that block, like G28 and
+    /// M109, wait 300 s).
+    #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
+    pub timeout: f64,
+}
 
 /// Runs the command.
 pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
-    let _ = (args, global);
-    bail!("not built yet")
+    let bytes = std::fs::read(&args.file)
+        .with_context(|| format!("{}: cannot read", args.file.display()))?;
+    let program = gcode::parse(&String::from_utf8_lossy(&bytes))
+        .with_context(|| format!("{}", args.file.display()))?;
+    let fingerprint = journal::fingerprint(&bytes);
+    if !(0.05..=3600.0).contains(&args.timeout) {
+        bail!("--timeout {}: expected 0.05 to 3600 seconds", args.timeout);
+    }
+    let journal_path = args
+        .journal
+        .clone()
+        .unwrap_or_else(|| journal::default_path(&args.file));
+
+    let (start, prelude, state) = if args.resume || args.from_layer.is_some() {
+        let record = if args.resume && !args.no_journal {
+            Some(JournalRecord::load(&journal_path).with_context(|| {
+                "--resume needs the journal of an earlier run (or use --from-layer N)".to_string()
+            })?)
+        } else {
+            None
+        };
+        let plan = journal::plan_resume(&program, fingerprint, record.as_ref(), args.from_layer)?;
+        if !global.quiet {
+            eprint!("{}", plan.summary);
+        }
+        (plan.start, plan.prelude, plan.state)
+    } else {
+        (0, Vec::new(), MachineState::default())
+    };
+
+    let journal = (!args.no_journal).then(|| {
+        let source_line = start
+            .checked_sub(1)
+            .and_then(|i| program.commands.get(i))
+            .map_or(0, |c| c.source_line);
+        let record = JournalRecord {
+            gcode: args.file.display().to_string(),
+            fingerprint,
+            total: program.commands.len(),
+            executed: start,
+            source_line,
+            layer: start
+                .checked_sub(1)
+                .and_then(|i| program.layer_of(i))
+                .map(|l| l.number),
+            state,
+            status: Status::Running,
+        };
+        (journal_path.clone(), record)
+    });
+
+    let mut port = streamer::open_port(&args.port, args.baud)
+        .with_context(|| format!("cannot open the serial port {}", args.port))?;
+    let cfg = Config {
+        window: usize::from(args.window),
+        rx_buffer: usize::from(args.rx_buffer),
+        timeout: Duration::from_secs_f64(args.timeout),
+        ..Config::default()
+    };
+
+    let control = Control::new();
+    let (tx, rx) = mpsc::channel::<()>();
+    if let Err(e) = ctrlc::set_handler(move || {
+        let _ = tx.send(());
+    }) && !global.quiet
+    {
+        eprintln!("warning: Ctrl-C will not pause the job: {e}");
+    }
+
+    let bar = if global.chatty() {
+        let bar = ProgressBar::new(program.commands.len() as u64);
+        if let Ok(style) = ProgressStyle::with_template("[{bar:30}] {percent:>3}% {msg}") {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let quiet = global.quiet || global.json;
+    let say = |bar: &ProgressBar, text: &str| {
+        if quiet {
+        } else if bar.is_hidden() {
+            eprintln!("{text}");
+        } else {
+            bar.println(text);
+        }
+    };
+
+    let job = Job {
+        program: &program,
+        start,
+        prelude,
+        journal,
+    };
+    let interactive = std::io::stdin().is_terminal();
+    let report = std::thread::scope(|s| {
+        let worker = s.spawn(|| {
+            streamer::stream(&mut *port, job, cfg, &control, |u| match u {
+                Update::Progress(p) => {
+                    bar.set_position(p.executed as u64);
+                    bar.set_message(describe(p));
+                }
+                Update::Event(Event::Warning(w)) => say(&bar, &format!("warning: {w}")),
+                Update::Event(Event::Resend { .. }) => {}
+                Update::Event(Event::Connected) => say(&bar, "printer connected"),
+                Update::Event(Event::Paused(true)) => say(&bar, "the printer asked to pause"),
+                Update::Event(Event::Paused(false)) => say(&bar, "the printer asked to resume"),
+                Update::Event(_) => {}
+            })
+        });
+        while !worker.is_finished() {
+            if rx.recv_timeout(Duration::from_millis(100)).is_err() {
+                continue;
+            }
+            if !interactive {
+                say(&bar, "interrupted: cancelling (heaters and motors off)");
+                cancel(&control, args.emergency);
+                continue;
+            }
+            control.pause();
+            let answer = bar.suspend(|| {
+                eprint!("\npaused: [r]esume or [c]ancel? ");
+                let _ = std::io::stderr().flush();
+                let mut line = String::new();
+                match std::io::stdin().lock().read_line(&mut line) {
+                    Ok(0) | Err(_) => "c".to_string(),
+                    Ok(_) => line.trim().to_lowercase(),
+                }
+            });
+            if answer.starts_with('r') {
+                control.resume();
+            } else {
+                say(&bar, "cancelling: heaters and motors off");
+                cancel(&control, args.emergency);
+            }
+        }
+        worker.join()
+    });
+    let report = match report {
+        Ok(r) => r,
+        Err(_) => bail!("the streaming thread panicked"),
+    };
+    bar.finish_and_clear();
+
+    if global.json {
+        print_json(&serde_json::json!({
+            "lines_sent": report.lines_sent,
+            "resends": report.resends,
+            "seconds": report.seconds,
+            "completed": report.completed,
+            "cancelled": report.cancelled,
+            "executed": report.executed,
+            "commands": program.commands.len(),
+            "error": report.error.as_ref().map(|e| e.to_string()),
+        }));
+    }
+    let resume_hint = if args.no_journal {
+        String::new()
+    } else {
+        format!(
+            "; to continue: isoforge print {} --port {} --resume",
+            args.file.display(),
+            args.port
+        )
+    };
+    if let Some(err) = report.error {
+        bail!("{err}{resume_hint}");
+    }
+    if report.cancelled {
+        bail!(
+            "cancelled after {} of {} commands{resume_hint}",
+            report.executed,
+            program.commands.len()
+        );
+    }
+    if !quiet {
+        eprintln!(
+            "printed {} commands: {} lines sent, {} resends, {:.1} s",
+            program.commands.len(),
+            report.lines_sent,
+            report.resends,
+            report.seconds
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn cancel(control: &Control, emergency: bool) {
+    if emergency {
+        control.emergency();
+    } else {
+        control.cancel();
+    }
+}
+
+/// "layer 12 Z2.40 | T 200/200 B 60/60 | ETA 3m12s".
+fn describe(p: &Progress) -> String {
+    let mut parts = Vec::new();
+    if p.paused {
+        parts.push("PAUSED".to_string());
+    }
+    match (p.layer, p.z) {
+        (Some(l), Some(z)) => parts.push(format!("layer {l} Z{z:.2}")),
+        (Some(l), None) => parts.push(format!("layer {l}")),
+        (None, Some(z)) => parts.push(format!("Z{z:.2}")),
+        _ => {}
+    }
+    if let Some(t) = &p.temps {
+        let mut s = Vec::new();
+        for (i, r) in t.tools.iter().enumerate() {
+            let name = if t.tools.len() > 1 {
+                format!("T{i}")
+            } else {
+                "T".into()
+            };
+            s.push(format!(
+                "{name} {:.0}/{:.0}",
+                r.actual,
+                r.target.unwrap_or(0.0)
+            ));
+        }
+        if let Some(b) = t.bed {
+            s.push(format!("B {:.0}/{:.0}", b.actual, b.target.unwrap_or(0.0)));
+        }
+        parts.push(s.join(" "));
+    }
+    if let Some(eta) = p.eta {
+        let secs = eta.as_secs();
+        parts.push(format!(
+            "ETA {}h{:02}m{:02}s",
+            secs / 3600,
+            secs / 60 % 60,
+            secs % 60
+        ));
+    }
+    parts.join(" | ")
 }

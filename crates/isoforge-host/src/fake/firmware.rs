@@ -158,6 +158,18 @@ impl Firmware {
         self.lost_bytes
     }
 
+    /// A one-line summary of the model's state, for test failure messages.
+    pub fn describe(&self) -> String {
+        format!(
+            "run={:?} last_n={} rx={}B line_buf={:?} queue={:?}",
+            self.run,
+            self.last_n,
+            self.rx.len(),
+            String::from_utf8_lossy(&self.line_buf),
+            self.queue
+        )
+    }
+
     /// True once the firmware halted or went silent.
     pub fn is_dead(&self) -> bool {
         matches!(self.run, Run::Halted | Run::Silent)

@@ -243,6 +243,10 @@ pub struct Protocol {
     /// Highest line number known executed.
     acked: u64,
     expect_rejection_ok: bool,
+    /// The next `ok` answers a command that is not ours (a damaged probe).
+    foreign_ok: bool,
+    /// A probe was sent since the last resync: `ok` counts may be off.
+    probed: bool,
     rejection_at: Instant,
     merge_resend: Option<u64>,
     resend_target: Option<u64>,
@@ -299,6 +303,8 @@ impl Protocol {
             in_flight: VecDeque::new(),
             acked: 0,
             expect_rejection_ok: false,
+            foreign_ok: false,
+            probed: false,
             rejection_at: now,
             merge_resend: None,
             resend_target: None,
@@ -501,6 +507,7 @@ impl Protocol {
         let after_rejection = std::mem::take(&mut self.expect_rejection_ok)
             && now.duration_since(self.rejection_at) < self.cfg.resend_settle;
         let merge = self.merge_resend.take();
+        let after_foreign = std::mem::take(&mut self.foreign_ok);
         if matches!(
             reply,
             Reply::Ok { .. } | Reply::Resend(_) | Reply::LineError { .. } | Reply::Busy
@@ -522,7 +529,7 @@ impl Protocol {
                 if let (Some(l), Some(b)) = (line, buffer) {
                     self.on_advanced(l, b);
                 }
-                self.on_ok(temps.is_some(), after_rejection, now);
+                self.on_ok(temps.is_some(), after_rejection, after_foreign, now);
             }
             Reply::Resend(n) => {
                 self.last_progress = now;
@@ -539,11 +546,10 @@ impl Protocol {
                 self.on_resend(last_line + 1, now);
                 self.merge_resend = Some(last_line + 1);
             }
-            Reply::Error(message)
-                if garbled && (message.contains("Line") || message.contains("checksum")) =>
-            {
-                // A damaged rejection: the request will be repeated by the lines behind it,
-                // or found by the probe that the silence triggers.
+            Reply::Error(_) if garbled => {
+                // A damaged line is not evidence enough to stop a print: a damaged rejection
+                // is repeated by the lines behind it or found by the probe a silence
+                // triggers, and a printer that really halted goes silent and is reported so.
             }
             Reply::Error(message) => {
                 let last = self.last_acked_words();
@@ -552,9 +558,23 @@ impl Protocol {
             Reply::Busy => self.last_progress = now,
             Reply::Wait => {}
             Reply::Start => self.on_start(now),
-            Reply::UnknownCommand(cmd) => self.event(Event::Warning(format!(
-                "the printer does not know the command {cmd:?}; continuing"
-            ))),
+            Reply::UnknownCommand(cmd) => {
+                let ours = self.in_flight.front().is_some_and(|f| {
+                    self.lines[f.line as usize]
+                        .text
+                        .trim()
+                        .eq_ignore_ascii_case(cmd.trim())
+                });
+                if ours {
+                    self.event(Event::Warning(format!(
+                        "the printer does not know the command {cmd:?}; continuing"
+                    )));
+                } else {
+                    // Not the next job command: a probe damaged on the way. Its `ok`
+                    // follows and must not be counted for a job line.
+                    self.foreign_ok = true;
+                }
+            }
             Reply::Temperatures(t) => self.event(Event::Temperatures(t)),
             Reply::Action(action) => self.on_action(action),
             Reply::Other(text) => {
@@ -610,7 +630,7 @@ impl Protocol {
         }
     }
 
-    fn on_ok(&mut self, has_temps: bool, after_rejection: bool, now: Instant) {
+    fn on_ok(&mut self, has_temps: bool, after_rejection: bool, after_foreign: bool, now: Instant) {
         match self.phase {
             Phase::Connecting { .. } => {
                 self.probes_outstanding = self.probes_outstanding.saturating_sub(1);
@@ -626,6 +646,14 @@ impl Protocol {
         }
         if after_rejection {
             // The `ok` Marlin prints with every resend request belongs to the rejected line.
+            return;
+        }
+        if after_foreign {
+            // A damaged probe still went through the command queue: it answers like one.
+            self.probes_outstanding = self.probes_outstanding.saturating_sub(1);
+            if self.recovery == Recovery::Probing {
+                self.after_probe();
+            }
             return;
         }
         let front_is_m105 = self
@@ -670,7 +698,7 @@ impl Protocol {
         let at_end = self.next as usize >= self.lines.len();
         let target = match self.in_flight.front() {
             Some(f) => Some(f.line),
-            None if self.suspect && at_end => self.sent_high,
+            None if (self.suspect || self.probed) && at_end => self.sent_high,
             None => None,
         };
         match target {
@@ -693,6 +721,7 @@ impl Protocol {
     fn end_recovery(&mut self) {
         self.recovery = Recovery::None;
         self.suspect = false;
+        self.probed = false;
         self.probes_unanswered = 0;
     }
 
@@ -908,9 +937,10 @@ impl Protocol {
         let at_end = self.next as usize >= self.lines.len();
         let quiet = self.in_flight.is_empty() && self.settle_until.is_none();
         if at_end && quiet && self.recovery == Recovery::None {
-            if self.suspect {
-                // A garbled line was seen: confirm the last line really arrived before
-                // calling the job done.
+            if self.suspect || self.probed {
+                // A garbled line was seen, or a probe (unnumbered, so unprotected) may have
+                // been damaged into another command: confirm the last line really arrived
+                // before calling the job done.
                 self.send_probe(now);
                 return self.outputs.pop_front();
             }
@@ -936,6 +966,7 @@ impl Protocol {
 
     fn send_probe(&mut self, now: Instant) {
         self.recovery = Recovery::Probing;
+        self.probed = true;
         self.probes_outstanding += 1;
         self.probes_unanswered += 1;
         self.last_progress = now;

@@ -67,10 +67,10 @@ impl Reply {
     /// Classifies a line (without its line ending).
     pub fn parse(raw: &str) -> Reply {
         let line = raw.trim();
-        if let Some(rest) = line.strip_prefix("ok") {
-            if rest.is_empty() || rest.starts_with(' ') {
-                return parse_ok(rest);
-            }
+        if let Some(rest) = line.strip_prefix("ok")
+            && (rest.is_empty() || rest.starts_with(' '))
+        {
+            return parse_ok(rest);
         }
         if let Some(n) = resend_number(line) {
             return Reply::Resend(n);

@@ -474,8 +474,9 @@ proptest! {
         let mut sim = Sim::new(&j, c, fw, seed ^ 0x5eed);
         sim.chunk = chunk;
         let out = sim.run(3_000_000);
-        prop_assert!(matches!(out, Outcome::Finished { cancelled: false }), "{:?}\n{}", out, sim.trace.iter().cloned().collect::<Vec<_>>().join("\n"));
-        prop_assert_eq!(sim.executed_job(), j);
+        prop_assert!(matches!(out, Outcome::Finished { cancelled: false }), "{:?}\n{}\n{}", out, sim.fw.describe(), sim.trace.iter().cloned().collect::<Vec<_>>().join("\n"));
+        let done = sim.executed_job();
+        prop_assert!(done == j, "executed {} of {}\n{}", done.len(), j.len(), sim.trace.iter().cloned().collect::<Vec<_>>().join("\n"));
     }
 }
 
