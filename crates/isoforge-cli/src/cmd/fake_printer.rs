@@ -15,7 +15,7 @@ use crate::common::Global;
 #[derive(Args, Debug)]
 #[command(
     about = "Run a simulated Marlin-style printer on a pseudo-terminal",
-    long_about = "Starts a simulated Marlin-style printer on a pseudo-terminal and prints its device \
+    after_help = "Starts a simulated Marlin-style printer on a pseudo-terminal and prints its device \
 path on the first line of stdout; point `isoforge print --port PATH` (or any host) at it. It \
 checks line numbers and checksums as Marlin does, has 4 command slots and a 128-byte receive \
 buffer (bytes beyond it are lost), answers `ok` after executing, heats with `echo:busy: \

@@ -21,7 +21,7 @@ use crate::common::{Global, print_json};
 #[derive(Args, Debug)]
 #[command(
     about = "Stream G-code to a printer over a serial port",
-    long_about = "Streams a G-code file to a RepRap/Marlin-style printer: comments stripped, each \
+    after_help = "Streams a G-code file to a RepRap/Marlin-style printer: comments stripped, each \
 line sent as `N<n> <command>*<checksum>` (lines over Marlin's 95 bytes are refused before \
 printing starts), up to --window commands and --rx-buffer bytes in flight (or the firmware's own \
 count with ADVANCED_OK), resend requests answered from a history, busy and heating waited through, \

@@ -1,0 +1,245 @@
+//! `isoforge fake-printer` and `isoforge print` as separate processes, as a user runs them.
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use isoforge_host::gcode;
+use isoforge_host::journal::{self, JournalRecord};
+use isoforge_tests::{fixtures, isoforge, isoforge_bin};
+
+/// A running `isoforge fake-printer`, killed if the test ends early.
+struct FakeProcess {
+    child: Child,
+    port: String,
+}
+
+impl FakeProcess {
+    fn start(faults: &str, log: &Path) -> FakeProcess {
+        let mut child = Command::new(isoforge_bin())
+            .args([
+                "fake-printer",
+                "--heat-tick",
+                "0",
+                "--faults",
+                faults,
+                "--log",
+            ])
+            .arg(log)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("fake-printer starts");
+        let mut first = String::new();
+        let stdout = child.stdout.take().expect("piped");
+        BufReader::new(stdout)
+            .read_line(&mut first)
+            .expect("a first line");
+        let port = first.trim().to_string();
+        assert!(
+            port.starts_with("/dev/"),
+            "first line is the pty path: {port:?}"
+        );
+        FakeProcess { child, port }
+    }
+
+    /// The fake exits by itself once the host has disconnected.
+    fn wait_exit(mut self) {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        while Instant::now() < deadline {
+            if let Ok(Some(status)) = self.child.try_wait() {
+                assert!(status.success());
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        panic!("fake-printer did not exit after the host disconnected");
+    }
+}
+
+impl Drop for FakeProcess {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+/// Numbered, non-M110 commands from a `--log` file.
+fn logged_job(log: &Path) -> Vec<String> {
+    std::fs::read_to_string(log)
+        .expect("log")
+        .lines()
+        .filter_map(|l| l.split_once('\t'))
+        .filter(|(n, c)| *n != "-" && !c.starts_with("M110"))
+        .map(|(_, c)| c.to_string())
+        .collect()
+}
+
+fn file_commands(path: &Path) -> Vec<String> {
+    gcode::read_file(path)
+        .expect("parses")
+        .commands
+        .into_iter()
+        .map(|c| c.text)
+        .collect()
+}
+
+#[test]
+fn help_says_what_print_does() {
+    let out = isoforge(&["print", "--help"]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    for word in [
+        "--port",
+        "--resume",
+        "--from-layer",
+        "--window",
+        "--rx-buffer",
+        "--emergency",
+        "journal",
+        "M112",
+        "Ctrl-C",
+        "fake-printer",
+    ] {
+        assert!(help.contains(word), "print --help lacks {word}");
+    }
+    let out = isoforge(&["fake-printer", "--help"]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    for word in [
+        "--faults",
+        "corrupt=",
+        "reset-at=",
+        "seed=",
+        "--log",
+        "--baud",
+    ] {
+        assert!(help.contains(word), "fake-printer --help lacks {word}");
+    }
+}
+
+#[test]
+fn print_a_20000_command_job_through_both_binaries() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode_path = dir.path().join("vase.gcode");
+    std::fs::write(
+        &gcode_path,
+        isoforge_host::sample::vase_with_commands(20_000),
+    )
+    .unwrap();
+    let log = dir.path().join("executed.tsv");
+    let fake = FakeProcess::start("corrupt=0.01,drop=0.002,seed=3", &log);
+    let out = isoforge(&[
+        "print",
+        gcode_path.to_str().unwrap(),
+        "--port",
+        &fake.port,
+        "--json",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(json["completed"], true);
+    assert!(json["resends"].as_u64().unwrap() > 0);
+    let want = file_commands(&gcode_path);
+    assert!(json["lines_sent"].as_u64().unwrap() > want.len() as u64);
+    assert!(json["seconds"].as_f64().unwrap() > 0.0);
+    fake.wait_exit();
+    assert_eq!(logged_job(&log), want);
+    let j = JournalRecord::load(&journal::default_path(&gcode_path)).unwrap();
+    assert_eq!(j.status, journal::Status::Completed);
+}
+
+#[test]
+fn reset_then_resume_through_both_binaries() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode_path = dir.path().join("vase.gcode");
+    let text = isoforge_host::sample::vase_with_commands(5_000);
+    std::fs::write(&gcode_path, &text).unwrap();
+    let g = gcode_path.to_str().unwrap();
+
+    let log1 = dir.path().join("run1.tsv");
+    let fake = FakeProcess::start("reset-at=2500", &log1);
+    let out = isoforge(&["print", g, "--port", &fake.port]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("reset") && stderr.contains("--resume"),
+        "{stderr}"
+    );
+    fake.wait_exit();
+
+    // What the resume will send first, from the journal the first run left.
+    let record = JournalRecord::load(&journal::default_path(&gcode_path)).unwrap();
+    let program = gcode::parse(&text).unwrap();
+    let plan = journal::plan_resume(
+        &program,
+        journal::fingerprint(text.as_bytes()),
+        Some(&record),
+        None,
+    )
+    .unwrap();
+
+    let log2 = dir.path().join("run2.tsv");
+    let fake = FakeProcess::start("", &log2);
+    let out = isoforge(&["print", g, "--port", &fake.port, "--resume", "--json"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("Resuming") && stderr.contains("heat"),
+        "says what it will do: {stderr}"
+    );
+    fake.wait_exit();
+
+    let mut all = logged_job(&log1);
+    all.extend(logged_job(&log2).into_iter().skip(plan.prelude.len()));
+    assert_eq!(
+        all,
+        file_commands(&gcode_path),
+        "each command exactly once across both runs"
+    );
+}
+
+#[test]
+fn a_line_marlin_would_truncate_is_refused_before_printing() {
+    let file = fixtures().join("gcode/too-long.gcode");
+    let out = isoforge(&[
+        "print",
+        file.to_str().unwrap(),
+        "--port",
+        "/dev/null-not-a-port",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("line 2") && stderr.contains("95"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn a_missing_port_is_a_clear_error() {
+    let file = fixtures().join("gcode/square-tube.gcode");
+    let out = isoforge(&[
+        "print",
+        file.to_str().unwrap(),
+        "--port",
+        "/dev/isoforge-no-such-port",
+        "--no-journal",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("/dev/isoforge-no-such-port"), "{stderr}");
+}
+
+#[test]
+fn bad_fault_specs_are_usage_errors_with_the_syntax() {
+    let out = isoforge(&["fake-printer", "--faults", "corrupt=7"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("corrupt") && stderr.contains("seed="),
+        "{stderr}"
+    );
+}
