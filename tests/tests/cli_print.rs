@@ -17,16 +17,14 @@ struct FakeProcess {
 
 impl FakeProcess {
     fn start(faults: &str, log: &Path) -> FakeProcess {
+        Self::start_with(&["--faults", faults], log)
+    }
+
+    fn start_with(args: &[&str], log: &Path) -> FakeProcess {
         let mut child = Command::new(isoforge_bin())
-            .args([
-                "fake-printer",
-                "--heat-tick",
-                "0",
-                "--faults",
-                faults,
-                "--log",
-            ])
+            .args(["fake-printer", "--heat-tick", "0", "--log"])
             .arg(log)
+            .args(args)
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
             .spawn()
@@ -242,4 +240,59 @@ fn bad_fault_specs_are_usage_errors_with_the_syntax() {
         stderr.contains("corrupt") && stderr.contains("seed="),
         "{stderr}"
     );
+}
+
+#[test]
+fn ctrl_c_without_a_terminal_cancels_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode_path = dir.path().join("vase.gcode");
+    std::fs::write(
+        &gcode_path,
+        isoforge_host::sample::vase_with_commands(5_000),
+    )
+    .unwrap();
+    let log = dir.path().join("executed.tsv");
+    // A slow link (9600 baud: about 30 lines a second) so the job is still running.
+    let fake = FakeProcess::start_with(&["--baud", "9600"], &log);
+
+    let print = Command::new(isoforge_bin())
+        .args([
+            "print",
+            gcode_path.to_str().unwrap(),
+            "--port",
+            &fake.port,
+            "--json",
+        ])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let status = Command::new("kill")
+        .args(["-INT", &print.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = print.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("cancelled"), "{stderr}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&out.stdout).expect("JSON even when cancelled");
+    assert_eq!(json["completed"], false);
+    assert_eq!(json["cancelled"], true);
+    fake.wait_exit();
+    // Stopped early, then heaters and motors off, as the last commands executed.
+    let done = logged_job(&log);
+    assert!(
+        done.len() < 5_000,
+        "cancelled early ({} commands ran)",
+        done.len()
+    );
+    assert_eq!(done[done.len() - 3..], ["M104 S0", "M140 S0", "M84"]);
+    let j = JournalRecord::load(&journal::default_path(&gcode_path)).unwrap();
+    assert_eq!(j.status, journal::Status::Cancelled);
+    // The journal names a point inside the file, so --resume could carry on.
+    assert!(j.executed > 0 && j.executed < done.len());
 }

@@ -326,7 +326,9 @@ pub fn stream(
         }
         if !out.is_empty() {
             port.set_timeout(Duration::from_secs(2)).ok();
-            if let Err(e) = port.write_all(&out).and_then(|()| port.flush()) {
+            // No flush: on a tty it is tcdrain, which waits for the printer to read the
+            // bytes and would turn windowed streaming back into ping-pong.
+            if let Err(e) = port.write_all(&out) {
                 error.get_or_insert(e.into());
             }
         }

@@ -638,7 +638,12 @@ impl Protocol {
                 return;
             }
             Phase::Booted { .. } => {
-                self.probes_outstanding = self.probes_outstanding.saturating_sub(1);
+                // An answer to a probe means the firmware reached its main loop: no need to
+                // wait out the rest of the boot chatter.
+                if self.probes_outstanding > 0 {
+                    self.probes_outstanding -= 1;
+                    self.phase = Phase::Booted { until: now };
+                }
                 return;
             }
             Phase::Done => return,
