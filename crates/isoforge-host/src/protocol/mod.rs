@@ -651,6 +651,11 @@ impl Protocol {
         }
         if after_rejection {
             // The `ok` Marlin prints with every resend request belongs to the rejected line.
+            // Had the firmware left it out, this would be a queued line's `ok` instead, and
+            // the count would be one off: look sooner if the printer then goes quiet.
+            if self.in_flight.iter().any(|f| f.received) {
+                self.suspect = true;
+            }
             return;
         }
         if after_foreign {
