@@ -635,6 +635,27 @@ mod tests {
     }
 
     #[test]
+    fn journal_writes_at_its_cadence_and_at_the_end() {
+        let dir = std::env::temp_dir().join(format!("isoforge-cadence-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("p.journal");
+        let p = parse(G).unwrap();
+        let mut j = Journal::create(path.clone(), record(&p, 1, 1)).unwrap();
+        let t0 = Instant::now();
+        let s = MachineState::default();
+        j.update(2, 2, None, &s, t0).unwrap();
+        // Within the cadence: the file still says 1.
+        assert_eq!(JournalRecord::load(&path).unwrap().executed, 1);
+        j.update(3, 3, None, &s, t0 + JOURNAL_CADENCE).unwrap();
+        assert_eq!(JournalRecord::load(&path).unwrap().executed, 3);
+        j.update(4, 4, None, &s, t0 + JOURNAL_CADENCE).unwrap();
+        j.finish(Status::Cancelled).unwrap();
+        let r = JournalRecord::load(&path).unwrap();
+        assert_eq!((r.executed, r.status), (4, Status::Cancelled));
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn durable_write_replaces_whole() {
         let dir = std::env::temp_dir().join(format!("isoforge-journal-{}", std::process::id()));
         fs::create_dir_all(&dir).unwrap();
