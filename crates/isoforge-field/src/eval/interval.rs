@@ -105,6 +105,9 @@ fn binary(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
 
 /// The choice of a min or max given its operands' intervals and NaN bits.
 fn choose(op: BinaryOp, a: Interval, an: bool, b: Interval, bn: bool) -> Option<Choice> {
+    if !matches!(op, BinaryOp::Min | BinaryOp::Max) {
+        return None;
+    }
     let c = if an || bn {
         Choice::Both
     } else {
@@ -113,8 +116,7 @@ fn choose(op: BinaryOp, a: Interval, an: bool, b: Interval, bn: bool) -> Option<
             BinaryOp::Min if b.sup() < a.inf() => Choice::Right,
             BinaryOp::Max if a.inf() > b.sup() => Choice::Left,
             BinaryOp::Max if b.inf() > a.sup() => Choice::Right,
-            BinaryOp::Min | BinaryOp::Max => Choice::Both,
-            _ => return None,
+            _ => Choice::Both,
         }
     };
     Some(c)
@@ -194,7 +196,10 @@ impl IntervalEval {
                 }
                 Op::Custom { k, out, args } => {
                     let ins = args.map(|a| r[a as usize]);
-                    let nan = args.iter().any(|&a| nr[a as usize]);
+                    // A callback handed an unbounded box may meet infinite points, where
+                    // its own arithmetic can give NaN (inf - inf): count that as possible.
+                    let nan =
+                        args.iter().any(|&a| nr[a as usize]) || ins.iter().any(|&i| unbounded(i));
                     let v = tape.customs()[k as usize].interval(ins);
                     if v.is_empty() {
                         (out, Interval::ENTIRE, true)
