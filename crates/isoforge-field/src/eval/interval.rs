@@ -24,6 +24,7 @@ pub struct IntervalEval {
 }
 
 /// An operation on one interval: `(enclosure, may be NaN)`.
+#[inline(never)]
 fn unary(op: UnaryOp, a: Interval) -> (Interval, bool) {
     if a.is_empty() {
         return (Interval::ENTIRE, true);
@@ -63,7 +64,20 @@ fn unary(op: UnaryOp, a: Interval) -> (Interval, bool) {
 }
 
 /// An operation on two intervals: `(enclosure, may be NaN)`.
+#[inline(never)]
 fn binary(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
+    // Fast path: bounded, non-empty operands cannot make + - * min max give NaN (no
+    // infinity meets a zero or an opposite infinity).
+    if a.is_common_interval() && b.is_common_interval() {
+        match op {
+            BinaryOp::Add => return (a + b, false),
+            BinaryOp::Sub => return (a - b, false),
+            BinaryOp::Mul => return (a * b, false),
+            BinaryOp::Min => return (a.min(b), false),
+            BinaryOp::Max => return (a.max(b), false),
+            _ => {}
+        }
+    }
     if a.is_empty() || b.is_empty() {
         return (Interval::ENTIRE, true);
     }
@@ -104,6 +118,7 @@ fn binary(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
 }
 
 /// The choice of a min or max given its operands' intervals and NaN bits.
+#[inline(always)]
 fn choose(op: BinaryOp, a: Interval, an: bool, b: Interval, bn: bool) -> Option<Choice> {
     if !matches!(op, BinaryOp::Min | BinaryOp::Max) {
         return None;
@@ -156,6 +171,7 @@ impl IntervalEval {
                     };
                     (out, i, i.is_empty())
                 }
+                Op::Copy { out, a } => (out, r[a as usize], nr[a as usize]),
                 Op::Const { out, c } => {
                     if c.is_nan() {
                         (out, Interval::ENTIRE, true)

@@ -154,6 +154,10 @@ fn deep_chains_do_not_overflow_the_stack() {
             let short = t.simplify(ie.choices());
             assert!(short.len() < 10, "{}", short.len());
             let moved = s.remap(&(&x + 1.0), &y, &Shape::z());
+            assert!(
+                format!("{moved:?}").len() < 100_000,
+                "Debug is depth-limited"
+            );
             drop(s);
             drop(moved);
             // A unary chain too (one child per level).

@@ -60,10 +60,17 @@ proptest! {
         let short = tape.simplify(ie.choices());
         prop_assert!(short.len() <= tape.len());
         let i_short = ie.eval(&short, intervals(&b));
-        for p in samples(&b, &f) {
+        let pts = samples(&b, &f);
+        let xyz: [Vec<f64>; 3] = [0, 1, 2].map(|k| pts.iter().map(|p| p[k]).collect());
+        let mut batch = vec![0.0; pts.len()];
+        BatchEval::new().eval(&short, &xyz[0], &xyz[1], &xyz[2], &mut batch);
+        let mut ge = GradEval::new();
+        for (j, p) in pts.into_iter().enumerate() {
             let v = pe.eval(&tape, p);
             if !v.is_nan() {
                 let w = pe.eval(&short, p);
+                prop_assert!(same(batch[j], w), "batch on the short tape");
+                prop_assert!(same(ge.eval(&short, p).v, w), "grad on the short tape");
                 prop_assert!(same(v, w), "{:?} over {:?} at {:?}: full {} short {}", s, b, p, v, w);
                 prop_assert!(encloses(i_short, v));
             }

@@ -11,9 +11,7 @@ use crate::common::{encloses, same};
 
 fn model(name: &str) -> String {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/vm/");
-    std::fs::read_to_string(format!("{path}{name}.vm"))
-        .or_else(|_| std::fs::read_to_string(format!("/work/shared/models/{name}.vm")))
-        .expect("model file")
+    std::fs::read_to_string(format!("{path}{name}.vm")).expect("model file in fixtures/vm")
 }
 
 /// An independent interpreter of the text: evaluates line by line with f64.
