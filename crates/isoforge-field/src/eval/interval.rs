@@ -23,6 +23,18 @@ pub struct IntervalEval {
     choices: Vec<Choice>,
 }
 
+/// An operation on one interval; the common cases inline.
+#[inline(always)]
+fn unary_fast(op: UnaryOp, a: Interval) -> (Interval, bool) {
+    match op {
+        UnaryOp::Neg => (-a, false),
+        UnaryOp::Abs => (a.abs(), false),
+        UnaryOp::Square => (a.sqr(), false),
+        UnaryOp::Sqrt if a.inf() >= 0.0 => (a.sqrt(), false),
+        _ => unary(op, a),
+    }
+}
+
 /// An operation on one interval: `(enclosure, may be NaN)`.
 #[inline(never)]
 fn unary(op: UnaryOp, a: Interval) -> (Interval, bool) {
@@ -63,21 +75,25 @@ fn unary(op: UnaryOp, a: Interval) -> (Interval, bool) {
     }
 }
 
+/// An operation on two intervals: `(enclosure, may be NaN)`; the common cases inline.
+#[inline(always)]
+fn binary_fast(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
+    match op {
+        // Registers never hold EMPTY, and min/max cannot create NaN themselves.
+        BinaryOp::Min => (a.min(b), false),
+        BinaryOp::Max => (a.max(b), false),
+        // Bounded operands cannot make + - * give NaN (no infinity meets a zero or an
+        // opposite infinity).
+        BinaryOp::Add if a.is_common_interval() && b.is_common_interval() => (a + b, false),
+        BinaryOp::Sub if a.is_common_interval() && b.is_common_interval() => (a - b, false),
+        BinaryOp::Mul if a.is_common_interval() && b.is_common_interval() => (a * b, false),
+        _ => binary(op, a, b),
+    }
+}
+
 /// An operation on two intervals: `(enclosure, may be NaN)`.
 #[inline(never)]
 fn binary(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
-    // Fast path: bounded, non-empty operands cannot make + - * min max give NaN (no
-    // infinity meets a zero or an opposite infinity).
-    if a.is_common_interval() && b.is_common_interval() {
-        match op {
-            BinaryOp::Add => return (a + b, false),
-            BinaryOp::Sub => return (a - b, false),
-            BinaryOp::Mul => return (a * b, false),
-            BinaryOp::Min => return (a.min(b), false),
-            BinaryOp::Max => return (a.max(b), false),
-            _ => {}
-        }
-    }
     if a.is_empty() || b.is_empty() {
         return (Interval::ENTIRE, true);
     }
@@ -119,22 +135,22 @@ fn binary(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
 
 /// The choice of a min or max given its operands' intervals and NaN bits.
 #[inline(always)]
-fn choose(op: BinaryOp, a: Interval, an: bool, b: Interval, bn: bool) -> Option<Choice> {
-    if !matches!(op, BinaryOp::Min | BinaryOp::Max) {
-        return None;
+fn choose(op: BinaryOp, a: Interval, an: bool, b: Interval, bn: bool) -> Choice {
+    if an || bn {
+        return Choice::Both;
     }
-    let c = if an || bn {
-        Choice::Both
+    let (lt, gt) = if op == BinaryOp::Min {
+        (a.sup() < b.inf(), b.sup() < a.inf())
     } else {
-        match op {
-            BinaryOp::Min if a.sup() < b.inf() => Choice::Left,
-            BinaryOp::Min if b.sup() < a.inf() => Choice::Right,
-            BinaryOp::Max if a.inf() > b.sup() => Choice::Left,
-            BinaryOp::Max if b.inf() > a.sup() => Choice::Right,
-            _ => Choice::Both,
-        }
+        (a.inf() > b.sup(), b.inf() > a.sup())
     };
-    Some(c)
+    if lt {
+        Choice::Left
+    } else if gt {
+        Choice::Right
+    } else {
+        Choice::Both
+    }
 }
 
 impl IntervalEval {
@@ -180,34 +196,34 @@ impl IntervalEval {
                     }
                 }
                 Op::Unary { op, out, a } => {
-                    let (v, nan) = unary(op, r[a as usize]);
+                    let (v, nan) = unary_fast(op, r[a as usize]);
                     (out, v, nan || nr[a as usize])
                 }
                 Op::Binary { op, out, a, b } => {
                     let (ia, ib) = (r[a as usize], r[b as usize]);
                     let (na, nb) = (nr[a as usize], nr[b as usize]);
-                    if let Some(c) = choose(op, ia, na, ib, nb) {
-                        self.choices.push(c);
+                    if matches!(op, BinaryOp::Min | BinaryOp::Max) {
+                        self.choices.push(choose(op, ia, na, ib, nb));
                     }
-                    let (v, nan) = binary(op, ia, ib);
+                    let (v, nan) = binary_fast(op, ia, ib);
                     (out, v, nan || na || nb)
                 }
                 Op::BinaryRI { op, out, a, imm } => {
                     let (ia, na) = (r[a as usize], nr[a as usize]);
                     let (ib, nb) = imm_interval(imm);
-                    if let Some(c) = choose(op, ia, na, ib, nb) {
-                        self.choices.push(c);
+                    if matches!(op, BinaryOp::Min | BinaryOp::Max) {
+                        self.choices.push(choose(op, ia, na, ib, nb));
                     }
-                    let (v, nan) = binary(op, ia, ib);
+                    let (v, nan) = binary_fast(op, ia, ib);
                     (out, v, nan || na || nb)
                 }
                 Op::BinaryIR { op, out, imm, b } => {
                     let (ib, nb) = (r[b as usize], nr[b as usize]);
                     let (ia, na) = imm_interval(imm);
-                    if let Some(c) = choose(op, ia, na, ib, nb) {
-                        self.choices.push(c);
+                    if matches!(op, BinaryOp::Min | BinaryOp::Max) {
+                        self.choices.push(choose(op, ia, na, ib, nb));
                     }
-                    let (v, nan) = binary(op, ia, ib);
+                    let (v, nan) = binary_fast(op, ia, ib);
                     (out, v, nan || na || nb)
                 }
                 Op::Custom { k, out, args } => {
@@ -238,9 +254,17 @@ impl IntervalEval {
     }
 }
 
-/// An immediate operand as an interval (NaN immediates are NaN everywhere).
+/// An immediate operand as an interval (NaN immediates are NaN everywhere; infinite ones
+/// become the unbounded sliver next to them, as [`enclose::interval`] does).
+#[inline(always)]
 fn imm_interval(c: f64) -> (Interval, bool) {
-    if c.is_nan() {
+    if c.is_finite() {
+        // A finite point interval is always valid.
+        (
+            Interval::try_from((c, c)).unwrap_or(Interval::ENTIRE),
+            false,
+        )
+    } else if c.is_nan() {
         (Interval::ENTIRE, true)
     } else {
         (enclose::interval(c, c), false)
