@@ -475,3 +475,59 @@ fn allocate(ssa: &[Ssa]) -> (Vec<Op>, usize) {
     ops.reverse();
     (ops, count as usize)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Interval, IntervalEval};
+
+    /// Every instruction writes a register in range that none of its operands use (the
+    /// batch evaluator borrows the output mutably next to shared operands).
+    fn check_invariants(t: &Tape) {
+        for op in t.ops() {
+            let out = op_out(op);
+            assert!((out as usize) < t.register_count());
+            let args: Vec<u32> = match *op {
+                Op::Var { .. } | Op::Const { .. } => vec![],
+                Op::Unary { a, .. } | Op::BinaryRI { a, .. } | Op::Copy { a, .. } => vec![a],
+                Op::BinaryIR { b, .. } => vec![b],
+                Op::Binary { a, b, .. } => vec![a, b],
+                Op::Custom { args, .. } => args.to_vec(),
+            };
+            for a in args {
+                assert!((a as usize) < t.register_count());
+                assert_ne!(a, out, "{op:?} writes a register it reads");
+            }
+        }
+        assert_eq!(t.output(), 0);
+        assert_eq!(
+            t.ops().iter().filter(|o| o.is_choice()).count(),
+            t.choice_count()
+        );
+    }
+
+    #[test]
+    fn simplified_colonnade_tapes_keep_register_invariants() {
+        let text = include_str!("../../../fixtures/vm/colonnade.vm");
+        let tape = Tape::new(&crate::vm::parse_vm(text).expect("parses"));
+        check_invariants(&tape);
+        let mut ie = IntervalEval::new();
+        let mut shortest = tape.len();
+        for i in 0..200 {
+            let side = [2.0, 0.5, 0.125, 1.0 / 32.0][i % 4];
+            let corner = [0, 1, 2].map(|k| ((i * [31, 57, 93][k]) % 64) as f64 / 32.0 - 1.0);
+            let b = corner.map(|c| Interval::try_from((c, c + side)).expect("box"));
+            ie.eval(&tape, b);
+            let short = tape.simplify(ie.choices());
+            check_invariants(&short);
+            ie.eval(&short, b);
+            let shorter = short.simplify(ie.choices());
+            check_invariants(&shorter);
+            shortest = shortest.min(shorter.len());
+        }
+        assert!(
+            shortest < tape.len() / 10,
+            "simplification barely shrank: {shortest}"
+        );
+    }
+}
