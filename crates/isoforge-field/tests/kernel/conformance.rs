@@ -130,3 +130,25 @@ fn constant_and_variable_only_tapes() {
     let mut ge = GradEval::new();
     assert_eq!(ge.eval(&z, [1.0, 2.0, 3.0]).d, [0.0, 0.0, 1.0]);
 }
+
+#[test]
+fn tapes_and_evaluators_cross_threads() {
+    fn send_sync<T: Send + Sync>() {}
+    fn send<T: Send>() {}
+    send_sync::<Tape>();
+    send_sync::<Shape>();
+    send::<PointEval>();
+    send::<BatchEval>();
+    send::<IntervalEval>();
+    send::<GradEval>();
+    // One tape shared by threads, each with its own evaluator.
+    let t = Tape::new(&(Shape::x().square() + Shape::y().sin()));
+    let handles: Vec<_> = (0..2)
+        .map(|i| {
+            let t = t.clone();
+            std::thread::spawn(move || PointEval::new().eval(&t, [i as f64, 0.0, 0.0]))
+        })
+        .collect();
+    let v: Vec<f64> = handles.into_iter().map(|h| h.join().unwrap()).collect();
+    assert_eq!(v, vec![0.0, 1.0]);
+}
