@@ -117,7 +117,7 @@ impl BatchEval {
         Self::default()
     }
 
-    /// Writes f(xs[i], ys[i], zs[i]) to `out[i]`. All four slices have the same length;
+    /// Writes `f(xs[i], ys[i], zs[i])` to `out[i]`. All four slices have the same length;
     /// if they differ, only the shortest length is evaluated.
     pub fn eval(&mut self, tape: &Tape, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
         let n = xs.len().min(ys.len()).min(zs.len()).min(out.len());
