@@ -139,14 +139,12 @@ fn choose(op: BinaryOp, a: Interval, an: bool, b: Interval, bn: bool) -> Choice 
     if an || bn {
         return Choice::Both;
     }
-    let (lt, gt) = if op == BinaryOp::Min {
-        (a.sup() < b.inf(), b.sup() < a.inf())
-    } else {
-        (a.inf() > b.sup(), b.inf() > a.sup())
-    };
-    if lt {
+    // `p.strict_precedes(q)`: every value of p is below every value of q (registers are
+    // never empty, where inari would answer true).
+    let (lower, upper) = if op == BinaryOp::Min { (a, b) } else { (b, a) };
+    if lower.strict_precedes(upper) {
         Choice::Left
-    } else if gt {
+    } else if upper.strict_precedes(lower) {
         Choice::Right
     } else {
         Choice::Both
