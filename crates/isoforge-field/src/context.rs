@@ -135,7 +135,8 @@ impl Context {
     ///
     /// Identities applied (each gives a bitwise-identical result for every input, NaN and
     /// signed zeros included): `a - 0`, `a + (-0)`, `(-0) + a`, `a * 1`, `1 * a`, `a / 1`,
-    /// `min(a, a)`, `max(a, a)`. Not applied: `a + 0` (turns `-0` into `+0`, which
+    /// `min(a, a)`, `max(a, a)`, `a * a = square(a)`, `a + (-b) = a - b`,
+    /// `(-a) + b = b - a`, `a - (-b) = a + b`. Not applied: `a + 0` (turns `-0` into `+0`, which
     /// `atan2` and `1/a` can see) and `a * 0` (NaN and infinity give NaN, not 0).
     /// Additions and multiplications are stored with their operands in id order, so
     /// `a + b` and `b + a` are one node (IEEE addition and multiplication commute).
@@ -152,6 +153,31 @@ impl Context {
             BinaryOp::Mul | BinaryOp::Div if is(cb, 1.0) => return a,
             BinaryOp::Mul if is(ca, 1.0) => return b,
             BinaryOp::Min | BinaryOp::Max if a == b => return a,
+            // a * a is bitwise a² and its interval is tighter as a square ([-2, 3]² is
+            // [0, 9], not [-6, 9]).
+            BinaryOp::Mul if a == b => return self.unary(UnaryOp::Square, a),
+            _ => {}
+        }
+        // Negations fold into the operation: a + (-b) and a - b round identically (IEEE
+        // subtraction is addition of the negation), signed zeros included.
+        let neg = |ctx: &Self, n: NodeId| match ctx.node(n) {
+            Node::Unary(UnaryOp::Neg, inner) => Some(*inner),
+            _ => None,
+        };
+        match op {
+            BinaryOp::Add => {
+                if let Some(nb) = neg(self, b) {
+                    return self.binary(BinaryOp::Sub, a, nb);
+                }
+                if let Some(na) = neg(self, a) {
+                    return self.binary(BinaryOp::Sub, b, na);
+                }
+            }
+            BinaryOp::Sub => {
+                if let Some(nb) = neg(self, b) {
+                    return self.binary(BinaryOp::Add, a, nb);
+                }
+            }
             _ => {}
         }
         let (a, b) = match op {

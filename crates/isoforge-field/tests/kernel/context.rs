@@ -54,6 +54,20 @@ fn exact_identities_only() {
     assert_ne!(ctx.binary(BinaryOp::Add, x, zero), x);
     let m = ctx.binary(BinaryOp::Mul, x, zero);
     assert_ne!(m, zero);
+    // Negations fold into additions and subtractions; a * a is a square.
+    let y = ctx.var(isoforge_field::Var::Y);
+    let ny = ctx.unary(UnaryOp::Neg, y);
+    let sub = ctx.binary(BinaryOp::Sub, x, y);
+    assert_eq!(ctx.binary(BinaryOp::Add, x, ny), sub);
+    let add = ctx.binary(BinaryOp::Add, x, y);
+    assert_eq!(ctx.binary(BinaryOp::Sub, x, ny), add);
+    let nx = ctx.unary(UnaryOp::Neg, x);
+    assert_eq!(
+        ctx.binary(BinaryOp::Add, nx, y),
+        ctx.binary(BinaryOp::Sub, y, x)
+    );
+    let sq = ctx.unary(UnaryOp::Square, x);
+    assert_eq!(ctx.binary(BinaryOp::Mul, x, x), sq);
     // Folding: 2 * 3 is the constant 6.
     let two = ctx.constant(2.0);
     let three = ctx.constant(3.0);
