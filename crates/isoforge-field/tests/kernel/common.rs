@@ -234,3 +234,12 @@ pub fn samples(b: &[(f64, f64); 3], fractions: &[[f64; 3]]) -> Vec<[f64; 3]> {
     }
     out
 }
+
+/// `n` proptest cases, unless `PROPTEST_CASES` is set (for long hunts:
+/// `PROPTEST_CASES=20000 cargo test -p isoforge-field --release`).
+pub fn cases(n: u32) -> ProptestConfig {
+    match std::env::var("PROPTEST_CASES") {
+        Ok(_) => ProptestConfig::default(),
+        Err(_) => ProptestConfig::with_cases(n),
+    }
+}

@@ -128,7 +128,7 @@ fn remap_keeps_sharing() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
+    #![proptest_config(crate::common::cases(64))]
     #[test]
     fn hash_consing_is_stable_on_random_shapes(s in any_shape()) {
         let mut ctx = Context::new();

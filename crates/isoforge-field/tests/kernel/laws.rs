@@ -10,7 +10,7 @@ fn fractions() -> impl Strategy<Value = Vec<[f64; 3]>> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(512))]
+    #![proptest_config(crate::common::cases(512))]
 
     /// The interval over a box encloses every point value in it; a NaN point value makes
     /// the interval ENTIRE.

@@ -137,7 +137,7 @@ fn errors_name_the_line() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    #![proptest_config(crate::common::cases(256))]
     /// Random lines never panic the reader, and whatever parses evaluates.
     #[test]
     fn random_lines_never_panic(lines in proptest::collection::vec(
