@@ -14,7 +14,11 @@ fn main() {
         })
         .collect();
     for (name, ours, theirs) in [
-        ("sin", enclose::sin as fn(Interval) -> (Interval, bool), Interval::sin as fn(Interval) -> Interval),
+        (
+            "sin",
+            enclose::sin as fn(Interval) -> (Interval, bool),
+            Interval::sin as fn(Interval) -> Interval,
+        ),
         ("cos", enclose::cos, Interval::cos),
         ("exp", enclose::exp, Interval::exp),
     ] {
@@ -23,23 +27,34 @@ fn main() {
         for b in &boxes {
             let (o, _) = ours(*b);
             let t = theirs(*b);
-            assert!(o.inf() <= t.inf() && o.sup() >= t.sup(), "{name}: ours {o:?} misses theirs {t:?} on {b:?}");
+            assert!(
+                o.inf() <= t.inf() && o.sup() >= t.sup(),
+                "{name}: ours {o:?} misses theirs {t:?} on {b:?}"
+            );
             wider += (o.wid() - t.wid()).max(0.0) / t.wid().max(1e-300);
         }
         let mut best = [f64::INFINITY; 2];
         for _ in 0..5 {
             let s = Instant::now();
             let mut acc = 0.0;
-            for b in &boxes { acc += ours(black_box(*b)).0.sup(); }
+            for b in &boxes {
+                acc += ours(black_box(*b)).0.sup();
+            }
             black_box(acc);
             best[0] = best[0].min(s.elapsed().as_secs_f64() / n as f64);
             let s = Instant::now();
             let mut acc = 0.0;
-            for b in &boxes { acc += theirs(black_box(*b)).sup(); }
+            for b in &boxes {
+                acc += theirs(black_box(*b)).sup();
+            }
             black_box(acc);
             best[1] = best[1].min(s.elapsed().as_secs_f64() / n as f64);
         }
-        println!("{name}: ours {:.1} ns, inari+gmp {:.1} ns, mean relative extra width {:.2e}",
-                 best[0] * 1e9, best[1] * 1e9, wider / n as f64);
+        println!(
+            "{name}: ours {:.1} ns, inari+gmp {:.1} ns, mean relative extra width {:.2e}",
+            best[0] * 1e9,
+            best[1] * 1e9,
+            wider / n as f64
+        );
     }
 }
