@@ -6,27 +6,39 @@ use std::path::Path;
 use rhai::{EvalAltResult, ParseError, Position};
 
 use crate::ScriptError;
+use crate::notation::Rewritten;
 
-fn location(path: &Path, pos: Position) -> String {
+/// Where errors point: the file, and the map from the compiled text's columns back to
+/// the text the user wrote.
+#[derive(Clone, Copy)]
+pub struct Locator<'a> {
+    /// The script's path, as given.
+    pub path: &'a Path,
+    /// The notation pass's column map.
+    pub map: &'a Rewritten,
+}
+
+fn location(at: Locator, pos: Position) -> String {
+    let path = at.path;
     match (pos.line(), pos.position()) {
-        (Some(l), Some(c)) => format!("{}:{l}:{c}", path.display()),
+        (Some(l), Some(c)) => format!("{}:{l}:{}", path.display(), at.map.original_column(l, c)),
         (Some(l), None) => format!("{}:{l}", path.display()),
         _ => path.display().to_string(),
     }
 }
 
 /// A syntax error.
-pub fn parse_error(path: &Path, err: &ParseError) -> ScriptError {
+pub fn parse_error(at: Locator, err: &ParseError) -> ScriptError {
     ScriptError(format!(
         "{}: syntax error: {}",
-        location(path, err.position()),
+        location(at, err.position()),
         err.err_type()
     ))
 }
 
 /// A runtime error, located at the innermost position (inside the function that failed),
 /// with the calls that led there.
-pub fn eval_error(path: &Path, err: &EvalAltResult) -> ScriptError {
+pub fn eval_error(at: Locator, err: &EvalAltResult) -> ScriptError {
     let mut calls = Vec::new();
     let mut inner = err;
     while let EvalAltResult::ErrorInFunctionCall(name, _, next, pos) = inner {
@@ -35,12 +47,12 @@ pub fn eval_error(path: &Path, err: &EvalAltResult) -> ScriptError {
         } else {
             format!("function `{name}`")
         };
-        calls.push(format!("in {who} called at {}", location(path, *pos)));
+        calls.push(format!("in {who} called at {}", location(at, *pos)));
         inner = next;
     }
     let pos = inner.position();
     let what = describe(inner);
-    let mut msg = format!("{}: {what}", location(path, pos));
+    let mut msg = format!("{}: {what}", location(at, pos));
     for c in calls.iter().rev() {
         msg.push_str("\n  ");
         msg.push_str(c);
@@ -60,6 +72,11 @@ fn describe(err: &EvalAltResult) -> String {
             crate::engine::MAX_CALL_LEVELS
         ),
         EvalAltResult::ErrorFunctionNotFound(sig, _) => {
+            // The notation pass turned `^` into `**`; name the operator the user wrote.
+            let sig = match sig.strip_prefix("** (") {
+                Some(rest) => format!("^ ({rest}"),
+                None => sig.clone(),
+            };
             format!("no function {sig}: unknown name, or wrong number or types of arguments")
         }
         EvalAltResult::ErrorRuntime(msg, _) => match msg.clone().into_immutable_string() {

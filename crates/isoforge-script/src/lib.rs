@@ -28,6 +28,7 @@ mod args;
 mod engine;
 mod errors;
 mod library;
+mod notation;
 mod ops;
 mod params;
 mod region;
@@ -75,7 +76,10 @@ pub fn load_file(path: &Path, params: &[(String, f64)]) -> Result<Model, ScriptE
             e.utf8_error().valid_up_to()
         ))
     })?;
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("vm")) {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vm"))
+    {
         load_vm(path, &text, params)
     } else {
         load_script(path, &text, params)
@@ -138,12 +142,17 @@ fn run(path: &Path, source: &str, params: &[(String, f64)]) -> Result<Model, Scr
             path.display()
         )));
     };
+    let rewritten = notation::rewrite(source);
+    let at = errors::Locator {
+        path,
+        map: &rewritten,
+    };
     let ast = engine
-        .compile(source)
-        .map_err(|e| errors::parse_error(path, &e))?;
+        .compile(&rewritten.source)
+        .map_err(|e| errors::parse_error(at, &e))?;
     let result: Dynamic = engine
         .eval_ast(&ast)
-        .map_err(|e| errors::eval_error(path, &e))?;
+        .map_err(|e| errors::eval_error(at, &e))?;
     let declared = std::mem::take(&mut *shared.lock().unwrap_or_else(|e| e.into_inner()));
     let unknown = params::undeclared(&declared);
     if !unknown.is_empty() {

@@ -42,11 +42,21 @@ fn register_primitives(engine: &mut Engine) {
     register_shapes!(engine, "Para", [a, b, c], classic::para(a, b, c));
     register_shapes!(engine, "Close", [s, b], classic::close(s, b));
     register_shapes!(engine, "HSpace", [h], classic::hspace(h));
-    register_shapes!(engine, "Tetrahedral", [a, b, c], classic::tetrahedral(a, b, c));
+    register_shapes!(
+        engine,
+        "Tetrahedral",
+        [a, b, c],
+        classic::tetrahedral(a, b, c)
+    );
     register_shapes!(engine, "Sinus", [r, h], classic::sinus(r, h));
     register_shapes!(engine, "Bug", [a, b, c], classic::bug(a, b, c));
     register_shapes!(engine, "Drope", [h], classic::drope(h));
-    register_shapes!(engine, "Heart", [a, b, c, d, e], classic::heart(a, b, c, d, e));
+    register_shapes!(
+        engine,
+        "Heart",
+        [a, b, c, d, e],
+        classic::heart(a, b, c, d, e)
+    );
 }
 
 fn register_transforms(engine: &mut Engine) {
@@ -63,9 +73,24 @@ fn register_transforms(engine: &mut Engine) {
     register_shapes!(engine, "RotateRX", [s, r], classic::rotate_rx(&s, r));
     register_shapes!(engine, "RotateRY", [s, r], classic::rotate_ry(&s, r));
     register_shapes!(engine, "RotateRZ", [s, r], classic::rotate_rz(&s, r));
-    register_shapes!(engine, "RotateX", [s, degrees], classic::rotate_x(&s, degrees));
-    register_shapes!(engine, "RotateY", [s, degrees], classic::rotate_y(&s, degrees));
-    register_shapes!(engine, "RotateZ", [s, degrees], classic::rotate_z(&s, degrees));
+    register_shapes!(
+        engine,
+        "RotateX",
+        [s, degrees],
+        classic::rotate_x(&s, degrees)
+    );
+    register_shapes!(
+        engine,
+        "RotateY",
+        [s, degrees],
+        classic::rotate_y(&s, degrees)
+    );
+    register_shapes!(
+        engine,
+        "RotateZ",
+        [s, degrees],
+        classic::rotate_z(&s, degrees)
+    );
 }
 
 fn register_combinations(engine: &mut Engine) {

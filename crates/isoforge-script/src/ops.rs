@@ -54,18 +54,20 @@ fn int_pow(a: INT, b: INT) -> Dynamic {
     Dynamic::from_float((a as FLOAT).powf(b as FLOAT))
 }
 
+/// Rhai's power operator, which scripts write as `^`.
+const POW: &str = "**";
+
 fn register_power(engine: &mut Engine) {
-    for op in ["^", "**"] {
-        engine.register_fn(op, int_pow);
-        engine.register_fn(op, |a: FLOAT, b: FLOAT| a.powf(b));
-        engine.register_fn(op, |a: INT, b: FLOAT| (a as FLOAT).powf(b));
-        engine.register_fn(op, |a: FLOAT, b: INT| pow_f_i(a, b));
-        engine.register_fn(op, |a: Shape, b: Shape| a.pow(&b));
-        engine.register_fn(op, |a: Shape, b: INT| a.pow(&Shape::constant(b as f64)));
-        engine.register_fn(op, |a: Shape, b: FLOAT| a.pow(&Shape::constant(b)));
-        engine.register_fn(op, |a: INT, b: Shape| Shape::constant(a as f64).pow(&b));
-        engine.register_fn(op, |a: FLOAT, b: Shape| Shape::constant(a).pow(&b));
-    }
+    // Scripts write `^`; the notation pass turns it into rhai's `**` (see notation.rs).
+    engine.register_fn(POW, int_pow);
+    engine.register_fn(POW, |a: FLOAT, b: FLOAT| a.powf(b));
+    engine.register_fn(POW, |a: INT, b: FLOAT| (a as FLOAT).powf(b));
+    engine.register_fn(POW, |a: FLOAT, b: INT| pow_f_i(a, b));
+    engine.register_fn(POW, |a: Shape, b: Shape| a.pow(&b));
+    engine.register_fn(POW, |a: Shape, b: INT| a.pow(&Shape::constant(b as f64)));
+    engine.register_fn(POW, |a: Shape, b: FLOAT| a.pow(&Shape::constant(b)));
+    engine.register_fn(POW, |a: INT, b: Shape| Shape::constant(a as f64).pow(&b));
+    engine.register_fn(POW, |a: FLOAT, b: Shape| Shape::constant(a).pow(&b));
 }
 
 fn pow_f_i(a: FLOAT, b: INT) -> FLOAT {
@@ -88,14 +90,11 @@ fn split(func: &str, d: &Dynamic) -> RhaiResult<Result<f64, Shape>> {
     })
 }
 
-fn unary(
-    engine: &mut Engine,
-    name: &'static str,
-    num: fn(f64) -> f64,
-    shape: fn(&Shape) -> Shape,
-) {
+fn unary(engine: &mut Engine, name: &'static str, num: fn(f64) -> f64, shape: fn(&Shape) -> Shape) {
     engine.register_fn(name, move |a: Dynamic| -> RhaiResult<Dynamic> {
-        Ok(number_or_shape(split(name, &a)?.map(num).map_err(|s| shape(&s))))
+        Ok(number_or_shape(
+            split(name, &a)?.map(num).map_err(|s| shape(&s)),
+        ))
     });
 }
 

@@ -47,7 +47,7 @@ pub fn register(engine: &mut Engine, shared: &Shared) {
               -> RhaiResult<Dynamic> {
             let min = number_arg("param", 3, "min", &min)?;
             let max = number_arg("param", 4, "max", &max)?;
-            if !(min <= max) {
+            if min.is_nan() || max.is_nan() || min > max {
                 return Err(fail(format!(
                     "param \"{name}\": the range [{min}, {max}] is empty (min must not exceed max)"
                 )));
@@ -114,11 +114,13 @@ fn declare(
     }
     // An integer default stays an integer when the value is whole, so a parameter can be a
     // count (`curve_fol_sphere(f, param("n", 7), ..)`) or an array index.
-    Ok(if default.is_int() && value.fract() == 0.0 && value.abs() < 9e15 {
-        Dynamic::from_int(value as INT)
-    } else {
-        Dynamic::from_float(value as FLOAT)
-    })
+    Ok(
+        if default.is_int() && value.fract() == 0.0 && value.abs() < 9e15 {
+            Dynamic::from_int(value as INT)
+        } else {
+            Dynamic::from_float(value as FLOAT)
+        },
+    )
 }
 
 /// The `--param` names the script never declared: probably typos.

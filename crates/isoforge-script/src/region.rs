@@ -34,10 +34,7 @@ fn interval(lo: f64, hi: f64) -> Interval {
 }
 
 fn eval(ev: &mut IntervalEval, tape: &Tape, (lo, hi): &Cell) -> Interval {
-    ev.eval(
-        tape,
-        [0, 1, 2].map(|i| interval(lo[i], hi[i])),
-    )
+    ev.eval(tape, [0, 1, 2].map(|i| interval(lo[i], hi[i])))
 }
 
 fn children((lo, hi): &Cell) -> impl Iterator<Item = Cell> + '_ {
@@ -114,11 +111,20 @@ fn prune(
 ) -> Pruned {
     let v = eval(ev, tape, &root);
     let mut p = if v.inf() > 0.0 {
-        Pruned { ambiguous: vec![], full: None }
+        Pruned {
+            ambiguous: vec![],
+            full: None,
+        }
     } else if v.sup() < 0.0 {
-        Pruned { ambiguous: vec![], full: Some(root) }
+        Pruned {
+            ambiguous: vec![],
+            full: Some(root),
+        }
     } else {
-        Pruned { ambiguous: vec![root], full: None }
+        Pruned {
+            ambiguous: vec![root],
+            full: None,
+        }
     };
     let mut side = (0..3).map(|i| root.1[i] - root.0[i]).fold(0.0, f64::max);
     for _ in 0..MAX_LEVELS {
