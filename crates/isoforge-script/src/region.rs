@@ -4,8 +4,13 @@
 //! are split, level by level (an octree that only descends where the model may be). Cells
 //! whose interval is all negative are inside the model and need no splitting. The bounding
 //! box of what remains encloses the model, since intervals are rigorous enclosures.
+//!
+//! Only the extremes matter for a bounding box, so each cell's centre is also sampled: a
+//! negative sample is a point known to be inside, and cells lying within the box of known
+//! inside points cannot widen the result and are dropped. What is left to split is the
+//! few cells at the model's six extremes, not its whole surface.
 
-use isoforge_field::{Bounds, Interval, IntervalEval, Shape, Tape};
+use isoforge_field::{Bounds, Interval, IntervalEval, PointEval, Shape, Tape};
 
 use crate::ScriptError;
 
@@ -81,35 +86,54 @@ impl Pruned {
     }
 }
 
-/// Splits every ambiguous cell once, dropping children proven outside.
-fn refine(tape: &Tape, ev: &mut IntervalEval, p: Pruned) -> Pruned {
+/// The evaluators pruning runs.
+struct Evals<'a> {
+    tape: &'a Tape,
+    interval: IntervalEval,
+    point: PointEval,
+}
+
+fn contains((lo, hi): &Cell, (a, b): &Cell) -> bool {
+    (0..3).all(|i| lo[i] <= a[i] && b[i] <= hi[i])
+}
+
+/// Splits every ambiguous cell once, dropping children proven outside and children that
+/// lie within what is known to be inside.
+fn refine(ev: &mut Evals, p: Pruned) -> Pruned {
     let mut next = Pruned {
         ambiguous: Vec::with_capacity(p.ambiguous.len() * 2),
         full: p.full,
     };
     for cell in &p.ambiguous {
         for child in children(cell) {
-            let v = eval(ev, tape, &child);
+            let v = eval(&mut ev.interval, ev.tape, &child);
             if v.inf() > 0.0 {
                 continue;
             }
             if v.sup() < 0.0 {
                 grow(&mut next.full, &child);
-            } else {
-                next.ambiguous.push(child);
+                continue;
             }
+            let centre = [0, 1, 2].map(|i| 0.5 * (child.0[i] + child.1[i]));
+            if ev.point.eval(ev.tape, centre) < 0.0 {
+                grow(&mut next.full, &(centre, centre));
+            }
+            next.ambiguous.push(child);
         }
+    }
+    if let Some(inside) = next.full {
+        next.ambiguous.retain(|c| !contains(&inside, c));
     }
     next
 }
 
-fn prune(
-    tape: &Tape,
-    ev: &mut IntervalEval,
-    root: Cell,
-    mut stop: impl FnMut(&Pruned, f64) -> bool,
-) -> Pruned {
-    let v = eval(ev, tape, &root);
+fn prune(tape: &Tape, root: Cell, mut stop: impl FnMut(&Pruned, f64) -> bool) -> Pruned {
+    let mut ev = Evals {
+        tape,
+        interval: IntervalEval::new(),
+        point: PointEval::new(),
+    };
+    let v = eval(&mut ev.interval, tape, &root);
     let mut p = if v.inf() > 0.0 {
         Pruned {
             ambiguous: vec![],
@@ -131,7 +155,7 @@ fn prune(
         if p.ambiguous.is_empty() || p.ambiguous.len() > MAX_CELLS || stop(&p, side) {
             break;
         }
-        p = refine(tape, ev, p);
+        p = refine(&mut ev, p);
         side *= 0.5;
     }
     p
@@ -143,10 +167,9 @@ fn prune(
 /// model is not bounded" when what may be inside reaches the search box's faces.
 pub fn find_bounds(shape: &Shape) -> Result<Bounds, ScriptError> {
     let tape = Tape::new(shape);
-    let mut ev = IntervalEval::new();
     let h = SEARCH_HALF_SIDE;
     let root = ([-h; 3], [h; 3]);
-    let p = prune(&tape, &mut ev, root, |p, side| {
+    let p = prune(&tape, root, |p, side| {
         p.bbox().is_some_and(|(lo, hi)| {
             let longest = (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
             side <= longest * TIGHTNESS
@@ -180,9 +203,8 @@ const EMPTY_CHECK_LEVELS: usize = 4;
 /// False means "may not be empty" (intervals can be loose); it never wrongly says empty.
 pub fn region_is_empty(shape: &Shape, region: &Bounds) -> bool {
     let tape = Tape::new(shape);
-    let mut ev = IntervalEval::new();
     let mut levels = 0;
-    let p = prune(&tape, &mut ev, (region.min, region.max), |_, _| {
+    let p = prune(&tape, (region.min, region.max), |_, _| {
         levels += 1;
         levels > EMPTY_CHECK_LEVELS
     });
