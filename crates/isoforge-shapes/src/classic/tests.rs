@@ -207,3 +207,75 @@ fn union_all_is_balanced_and_complete() {
     }
     assert_eq!(depth(&u), 7);
 }
+
+mod laws {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn lumpy() -> Shape {
+        // Not symmetric under any of the transforms, so an identity that fails shows.
+        torus(2.0, 0.5) + 0.3 * Shape::x() - 0.2 * Shape::y() * Shape::z()
+    }
+
+    fn near(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 1e-9 * (1.0 + a.abs().max(b.abs()))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(128))]
+
+        #[test]
+        fn transforms_undo(
+            p in prop::array::uniform3(-4.0f64..4.0),
+            t in -3.0f64..3.0,
+            k in 0.2f64..5.0,
+            r in -7.0f64..7.0,
+        ) {
+            let s = lumpy();
+            let v = at(&s, p);
+            let undo: [(&str, Shape); 10] = [
+                ("TransX", trans_x(&trans_x(&s, t), -t)),
+                ("TransY", trans_y(&trans_y(&s, t), -t)),
+                ("TransZ", trans_z(&trans_z(&s, t), -t)),
+                ("ScaleX", scale_x(&scale_x(&s, k), 1.0 / k)),
+                ("ScaleXYZ", scale_xyz(&scale_xyz(&s, k), 1.0 / k)),
+                ("ReflectXY", reflect_xy(&reflect_xy(&s))),
+                ("ReflectYZ", reflect_yz(&reflect_yz(&s))),
+                ("RotateRX", rotate_rx(&rotate_rx(&s, r), -r)),
+                ("RotateRY", rotate_ry(&rotate_ry(&s, r), -r)),
+                ("RotateZ", rotate_z(&rotate_z(&s, r * 30.0), -r * 30.0)),
+            ];
+            for (name, u) in undo {
+                prop_assert!(near(at(&u, p), v), "{name}: {} vs {v}", at(&u, p));
+            }
+        }
+
+        #[test]
+        fn rotations_keep_a_centred_sphere(
+            p in prop::array::uniform3(-4.0f64..4.0),
+            r in -7.0f64..7.0,
+        ) {
+            let s = sphere(2.0);
+            let v = at(&s, p);
+            for rotated in [rotate_rx(&s, r), rotate_ry(&s, r), rotate_rz(&s, r)] {
+                prop_assert!(near(at(&rotated, p), v));
+            }
+        }
+
+        #[test]
+        fn booleans_are_min_and_max(
+            p in prop::array::uniform3(-4.0f64..4.0),
+            c in prop::array::uniform3(-1.0f64..1.0),
+        ) {
+            let a = sphere(2.0);
+            let b = translate(&cube(2.0), c);
+            let (va, vb) = (at(&a, p), at(&b, p));
+            prop_assert_eq!(at(&union(&a, &b), p), va.min(vb));
+            prop_assert_eq!(at(&union(&b, &a), p), va.min(vb));
+            prop_assert_eq!(at(&intersect(&a, &b), p), va.max(vb));
+            prop_assert_eq!(at(&subtract(&a, &b), p), va.max(-vb));
+            // Inside the union iff inside either.
+            prop_assert_eq!(at(&union(&a, &b), p) < 0.0, va < 0.0 || vb < 0.0);
+        }
+    }
+}
