@@ -80,10 +80,10 @@ proptest! {
     ) {
         let s: Shape = translate(&sphere(r), c);
         let b = find_bounds(&s).unwrap();
-        for i in 0..3 {
-            prop_assert!(b.min[i] <= c[i] - r && b.max[i] >= c[i] + r, "{b:?}");
+        for (i, ci) in c.iter().enumerate() {
+            prop_assert!(b.min[i] <= ci - r && b.max[i] >= ci + r, "{b:?}");
             // Tight: padding is a few percent, plus what the cells add.
-            prop_assert!(b.min[i] >= c[i] - 1.2 * r && b.max[i] <= c[i] + 1.2 * r, "{b:?}");
+            prop_assert!(b.min[i] >= ci - 1.2 * r && b.max[i] <= ci + 1.2 * r, "{b:?}");
         }
     }
 }
