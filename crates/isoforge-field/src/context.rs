@@ -4,7 +4,7 @@
 //! returns the existing node. Constants are keyed by bit pattern (so `0.0` and `-0.0` stay
 //! apart, and NaN constants dedupe), custom nodes by the address of their callbacks.
 //! Only identities that can never change a result are applied on insert (see
-//! [`Context::binary`]); everything else is left to evaluation.
+//! [`Context::binary`] and [`Context::unary`]); everything else is left to evaluation.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -110,7 +110,8 @@ impl Context {
         self.insert(Key::Const(c.to_bits()), Node::Const(c))
     }
 
-    /// A unary operation, folded when the operand is constant; `--a` becomes `a`.
+    /// A unary operation, folded when the operand is constant. Identities (bitwise exact):
+    /// `--a = a`, `||a|| = |a|`, `|-a| = |a|`.
     pub fn unary(&mut self, op: UnaryOp, a: NodeId) -> NodeId {
         if let Some(c) = self.as_constant(a) {
             return self.constant(scalar::unary(op, c));
@@ -120,6 +121,11 @@ impl Context {
             (UnaryOp::Neg, Node::Unary(UnaryOp::Neg, inner)) => return *inner,
             // Taking abs twice changes nothing.
             (UnaryOp::Abs, Node::Unary(UnaryOp::Abs, _)) => return a,
+            // |-a| is bitwise |a| (abs clears the sign bit negation flipped).
+            (UnaryOp::Abs, Node::Unary(UnaryOp::Neg, inner)) => {
+                let inner = *inner;
+                return self.unary(UnaryOp::Abs, inner);
+            }
             _ => {}
         }
         self.insert(Key::Unary(op, a), Node::Unary(op, a))

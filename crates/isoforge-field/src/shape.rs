@@ -86,14 +86,32 @@ impl Drop for ShapeNode {
 pub struct Shape(pub(crate) Arc<ShapeNode>);
 
 impl fmt::Debug for Shape {
+    /// Prints the expression; below 32 levels of nesting it prints `..` (a deep chain would
+    /// otherwise recurse once per level).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.node() {
-            ShapeNode::Var(v) => write!(f, "{v:?}"),
-            ShapeNode::Const(c) => write!(f, "{c}"),
-            ShapeNode::Unary(op, a) => write!(f, "{op:?}({a:?})"),
-            ShapeNode::Binary(op, a, b) => write!(f, "{op:?}({a:?}, {b:?})"),
-            ShapeNode::Custom(c, _) => write!(f, "{}(..)", c.name()),
+        fn go(s: &Shape, f: &mut fmt::Formatter<'_>, depth: usize) -> fmt::Result {
+            if depth > 32 {
+                return write!(f, "..");
+            }
+            match s.node() {
+                ShapeNode::Var(v) => write!(f, "{v:?}"),
+                ShapeNode::Const(c) => write!(f, "{c}"),
+                ShapeNode::Unary(op, a) => {
+                    write!(f, "{op:?}(")?;
+                    go(a, f, depth + 1)?;
+                    write!(f, ")")
+                }
+                ShapeNode::Binary(op, a, b) => {
+                    write!(f, "{op:?}(")?;
+                    go(a, f, depth + 1)?;
+                    write!(f, ", ")?;
+                    go(b, f, depth + 1)?;
+                    write!(f, ")")
+                }
+                ShapeNode::Custom(c, _) => write!(f, "{}(..)", c.name()),
+            }
         }
+        go(self, f, 0)
     }
 }
 

@@ -1,15 +1,17 @@
 //! Tapes: a graph flattened to SSA instructions with allocated registers, and their
 //! simplification by the choices an interval pass recorded.
 //!
-//! A tape keeps two forms of the same program, instruction for instruction:
-//! - SSA form (`ssa`): instruction `i` defines value `i`, operands name earlier values.
-//!   Simplification works on this form.
-//! - Register form (`ops`): the same instructions with operands and results in a small set
-//!   of reusable registers, allocated by a linear scan from the output backwards (as
-//!   fidget does). Evaluators run this form; few registers keep the batch evaluator's
-//!   working set in cache.
-//!
+//! The graph is first flattened to SSA form (instruction `i` defines value `i`), then
+//! registers are allocated by a linear scan from the output backwards (as fidget does):
+//! a value takes a register at its last use and gives it back at its definition, so a
+//! few registers serve a long tape and the batch evaluator's working set stays in cache.
 //! Constant operands of binary operations are immediates, so `x * 2` is one instruction.
+//!
+//! [`Tape::simplify`] works directly on the register form in one backward pass: liveness
+//! (a register is needed if a live instruction later reads it), replacement of decided
+//! min/max instructions by their kept operand, and allocation of fresh registers, all at
+//! once. Scratch buffers live in a thread-local, so a simplification allocates only the
+//! new tape.
 
 use std::sync::Arc;
 
@@ -42,41 +44,6 @@ pub(crate) enum Ssa {
     BinaryIR(BinaryOp, f64, u32),
     /// Custom node number `.0` at the point given by three values.
     Custom(u32, [u32; 3]),
-}
-
-impl Ssa {
-    /// Calls `f` on every operand.
-    fn for_args(&self, mut f: impl FnMut(u32)) {
-        match *self {
-            Ssa::Var(_) | Ssa::Const(_) => {}
-            Ssa::Unary(_, a) | Ssa::BinaryRI(_, a, _) | Ssa::BinaryIR(_, _, a) => f(a),
-            Ssa::Binary(_, a, b) => {
-                f(a);
-                f(b)
-            }
-            Ssa::Custom(_, i) => i.iter().for_each(|&a| f(a)),
-        }
-    }
-    /// The same instruction with every operand mapped through `f`.
-    fn map_args(&self, mut f: impl FnMut(u32) -> u32) -> Ssa {
-        match *self {
-            Ssa::Var(v) => Ssa::Var(v),
-            Ssa::Const(c) => Ssa::Const(c),
-            Ssa::Unary(op, a) => Ssa::Unary(op, f(a)),
-            Ssa::Binary(op, a, b) => Ssa::Binary(op, f(a), f(b)),
-            Ssa::BinaryRI(op, a, c) => Ssa::BinaryRI(op, f(a), c),
-            Ssa::BinaryIR(op, c, a) => Ssa::BinaryIR(op, c, f(a)),
-            Ssa::Custom(k, i) => Ssa::Custom(k, i.map(f)),
-        }
-    }
-    fn is_choice(&self) -> bool {
-        matches!(
-            self,
-            Ssa::Binary(BinaryOp::Min | BinaryOp::Max, ..)
-                | Ssa::BinaryRI(BinaryOp::Min | BinaryOp::Max, ..)
-                | Ssa::BinaryIR(BinaryOp::Min | BinaryOp::Max, ..)
-        )
-    }
 }
 
 /// One instruction in register form: `out` and operands are register numbers. The
@@ -120,16 +87,39 @@ pub(crate) enum Op {
         out: u32,
         args: [u32; 3],
     },
+    /// `out = a` (left by simplification where a kept operand already had a register).
+    Copy {
+        out: u32,
+        a: u32,
+    },
+}
+
+impl Op {
+    fn is_choice(&self) -> bool {
+        matches!(
+            self,
+            Op::Binary {
+                op: BinaryOp::Min | BinaryOp::Max,
+                ..
+            } | Op::BinaryRI {
+                op: BinaryOp::Min | BinaryOp::Max,
+                ..
+            } | Op::BinaryIR {
+                op: BinaryOp::Min | BinaryOp::Max,
+                ..
+            }
+        )
+    }
 }
 
 struct TapeData {
-    ssa: Vec<Ssa>,
     ops: Vec<Op>,
     regs: usize,
     choices: usize,
     /// The register holding the result after the last instruction.
     out: u32,
-    customs: Vec<Arc<dyn CustomField>>,
+    /// Shared by a tape and all its simplifications (indices stay valid).
+    customs: Arc<[Arc<dyn CustomField>]>,
 }
 
 /// An evaluable program. Cheap to clone (shared).
@@ -215,24 +205,18 @@ impl Tape {
             slot[i] = ssa.len() as u32;
             ssa.push(op);
         }
-        Tape::from_ssa(ssa, customs)
+        let (ops, regs) = allocate(&ssa);
+        Tape::from_ops(ops, regs, customs.into())
     }
 
-    /// Builds the register form of an SSA program whose last instruction is the output
-    /// and whose every instruction is live.
-    fn from_ssa(ssa: Vec<Ssa>, customs: Vec<Arc<dyn CustomField>>) -> Tape {
-        let (ops, regs) = allocate(&ssa);
-        let choices = ssa.iter().filter(|s| s.is_choice()).count();
-        let out = match ops.last() {
-            Some(op) => op_out(op),
-            None => 0,
-        };
+    fn from_ops(ops: Vec<Op>, regs: usize, customs: Arc<[Arc<dyn CustomField>]>) -> Tape {
+        let choices = ops.iter().filter(|o| o.is_choice()).count();
+        // The allocator gives the output register 0.
         Tape(Arc::new(TapeData {
-            ssa,
             ops,
-            regs,
+            regs: regs.max(1),
             choices,
-            out,
+            out: 0,
             customs,
         }))
     }
@@ -275,137 +259,138 @@ impl Tape {
     /// interval pass that produced them covered).
     ///
     /// A min or max whose choice is `Left` (`Right`) is replaced by its left (right)
-    /// operand, then everything no longer reachable from the output is dropped and
-    /// registers are allocated again. With no choice decided, the tape itself is returned
-    /// (a pointer copy). `choices` shorter than [`Tape::choice_count`] count as `Both`
-    /// for the missing ones.
+    /// operand, everything no longer needed by the output is dropped, and registers are
+    /// allocated again. With no choice decided, the tape itself is returned (a pointer
+    /// copy). `choices` shorter than [`Tape::choice_count`] count as `Both` for the
+    /// missing ones.
     pub fn simplify(&self, choices: &[Choice]) -> Tape {
         if !choices.iter().any(|c| *c != Choice::Both) {
             return self.clone();
         }
-        let ssa = &self.0.ssa;
-        let n = ssa.len();
-        // Forward: where each value really comes from once decided choices are applied.
-        // `alias[i] = j` means value i equals value j; u32::MAX marks an immediate that
-        // replaced it (stored in `imm`).
-        let mut alias: Vec<u32> = Vec::with_capacity(n);
-        let mut imm: Vec<f64> = vec![0.0; n];
-        let mut k = 0;
-        for (i, op) in ssa.iter().enumerate() {
-            let mut target = i as u32;
-            if op.is_choice() {
-                let c = choices.get(k).copied().unwrap_or(Choice::Both);
-                k += 1;
-                match (c, *op) {
-                    (Choice::Left, Ssa::Binary(_, a, _) | Ssa::BinaryRI(_, a, _)) => {
-                        target = alias[a as usize];
-                        imm[i] = imm[a as usize];
-                    }
-                    (Choice::Right, Ssa::Binary(_, _, b) | Ssa::BinaryIR(_, _, b)) => {
-                        target = alias[b as usize];
-                        imm[i] = imm[b as usize];
-                    }
-                    (Choice::Right, Ssa::BinaryRI(_, _, c))
-                    | (Choice::Left, Ssa::BinaryIR(_, c, _)) => {
-                        target = u32::MAX;
-                        imm[i] = c;
-                    }
-                    _ => {}
-                }
-            }
-            alias.push(target);
-        }
-        // Backward: liveness from the output, through aliases.
-        let mut live = vec![false; n];
-        let root = alias[n - 1];
-        if root == u32::MAX {
-            return Tape::from_ssa(vec![Ssa::Const(imm[n - 1])], Vec::new());
-        }
-        live[root as usize] = true;
-        for i in (0..n).rev() {
-            if !live[i] {
-                continue;
-            }
-            ssa[i].for_args(|a| {
-                let t = alias[a as usize];
-                if t != u32::MAX {
-                    live[t as usize] = true;
-                }
-            });
-        }
-        // Emit live instructions with renumbered operands. An operand aliased to an
-        // immediate turns a register operand into an immediate one.
-        let mut renum = vec![u32::MAX; n];
-        let mut out: Vec<Ssa> = Vec::with_capacity(n);
-        let mut used_customs: Vec<u32> = Vec::new();
-        let mut customs: Vec<Arc<dyn CustomField>> = Vec::new();
-        let mut const_slot: Vec<(u64, u32)> = Vec::new();
-        for i in 0..n {
-            if !live[i] {
-                continue;
-            }
-            let op = ssa[i];
-            let imm_of = |a: u32| (alias[a as usize] == u32::MAX).then(|| imm[a as usize]);
-            let reg = |a: u32| renum[alias[a as usize] as usize];
-            let new = match op {
-                Ssa::Binary(bop, a, b) => match (imm_of(a), imm_of(b)) {
-                    (None, None) => Ssa::Binary(bop, reg(a), reg(b)),
-                    (None, Some(c)) => Ssa::BinaryRI(bop, reg(a), c),
-                    (Some(c), None) => Ssa::BinaryIR(bop, c, reg(b)),
-                    (Some(x), Some(y)) => Ssa::Const(crate::eval::scalar::binary(bop, x, y)),
-                },
-                Ssa::BinaryRI(bop, a, c) => match imm_of(a) {
-                    None => Ssa::BinaryRI(bop, reg(a), c),
-                    Some(x) => Ssa::Const(crate::eval::scalar::binary(bop, x, c)),
-                },
-                Ssa::BinaryIR(bop, c, b) => match imm_of(b) {
-                    None => Ssa::BinaryIR(bop, c, reg(b)),
-                    Some(y) => Ssa::Const(crate::eval::scalar::binary(bop, c, y)),
-                },
-                Ssa::Unary(uop, a) => match imm_of(a) {
-                    None => Ssa::Unary(uop, reg(a)),
-                    Some(x) => Ssa::Const(crate::eval::scalar::unary(uop, x)),
-                },
-                Ssa::Custom(kk, ins) => {
-                    // Immediate operands of a custom node need a constant instruction.
-                    let mut args = [0u32; 3];
-                    for (j, &a) in ins.iter().enumerate() {
-                        args[j] = match imm_of(a) {
-                            None => reg(a),
-                            Some(c) => {
-                                let bits = c.to_bits();
-                                match const_slot.iter().find(|(b, _)| *b == bits) {
-                                    Some((_, s)) => *s,
-                                    None => {
-                                        let s = out.len() as u32;
-                                        out.push(Ssa::Const(c));
-                                        const_slot.push((bits, s));
-                                        s
-                                    }
-                                }
-                            }
-                        };
-                    }
-                    let slot = match used_customs.iter().position(|&u| u == kk) {
-                        Some(p) => p as u32,
-                        None => {
-                            used_customs.push(kk);
-                            customs.push(self.0.customs[kk as usize].clone());
-                            customs.len() as u32 - 1
-                        }
-                    };
-                    Ssa::Custom(slot, args)
-                }
-                other => other.map_args(reg),
-            };
-            renum[i] = out.len() as u32;
-            out.push(new);
-        }
-        // The root is the highest live value and constants for custom nodes are emitted
-        // just before their user, so the root is still the last instruction.
-        debug_assert_eq!(renum[root as usize] as usize, out.len() - 1);
-        Tape::from_ssa(out, customs)
+        SCRATCH.with(|s| match s.try_borrow_mut() {
+            Ok(mut s) => self.simplify_with(choices, &mut s),
+            // Re-entered from a custom field's callback on this thread: use fresh buffers.
+            Err(_) => self.simplify_with(choices, &mut Scratch::default()),
+        })
     }
+
+    fn simplify_with(&self, choices: &[Choice], s: &mut Scratch) -> Tape {
+        const NONE: u32 = u32::MAX;
+        let old = &self.0.ops;
+        // new_of[r]: the new register that old register r's current value goes to, or
+        // NONE when no live instruction needs it (walking backwards).
+        s.new_of.clear();
+        s.new_of.resize(self.0.regs, NONE);
+        s.free.clear();
+        s.ops.clear();
+        let mut count = 1u32;
+        s.new_of[self.0.out as usize] = 0;
+        let mut k = self.0.choices;
+        for op in old.iter().rev() {
+            let choice = if op.is_choice() {
+                k -= 1;
+                choices.get(k).copied().unwrap_or(Choice::Both)
+            } else {
+                Choice::Both
+            };
+            let out = op_out(op);
+            let r = s.new_of[out as usize];
+            if r == NONE {
+                continue; // nothing live reads this value
+            }
+            // The value dies here (walking backwards): its register is free above.
+            s.new_of[out as usize] = NONE;
+            // A decided choice becomes its kept operand: a register or an immediate.
+            let kept = match (choice, *op) {
+                (Choice::Left, Op::Binary { a, .. } | Op::BinaryRI { a, .. }) => Some(Ok(a)),
+                (Choice::Right, Op::Binary { b, .. } | Op::BinaryIR { b, .. }) => Some(Ok(b)),
+                (Choice::Left, Op::BinaryIR { imm, .. }) => Some(Err(imm)),
+                (Choice::Right, Op::BinaryRI { imm, .. }) => Some(Err(imm)),
+                _ => None,
+            };
+            match kept {
+                Some(Ok(a)) => {
+                    let na = s.new_of[a as usize];
+                    if na == NONE {
+                        // The operand's value goes straight to where the result went.
+                        s.new_of[a as usize] = r;
+                    } else {
+                        s.ops.push(Op::Copy { out: r, a: na });
+                        s.free.push(r);
+                    }
+                    continue;
+                }
+                Some(Err(c)) => {
+                    s.ops.push(Op::Const { out: r, c });
+                    s.free.push(r);
+                    continue;
+                }
+                None => {}
+            }
+            let (new_of, free) = (&mut s.new_of, &mut s.free);
+            let mut reg = |a: u32| {
+                let a = a as usize;
+                if new_of[a] == NONE {
+                    new_of[a] = free.pop().unwrap_or_else(|| {
+                        count += 1;
+                        count - 1
+                    });
+                }
+                new_of[a]
+            };
+            let new = match *op {
+                Op::Var { v, .. } => Op::Var { out: r, v },
+                Op::Const { c, .. } => Op::Const { out: r, c },
+                Op::Unary { op, a, .. } => Op::Unary {
+                    op,
+                    out: r,
+                    a: reg(a),
+                },
+                Op::Binary { op, a, b, .. } => {
+                    let a = reg(a);
+                    Op::Binary {
+                        op,
+                        out: r,
+                        a,
+                        b: reg(b),
+                    }
+                }
+                Op::BinaryRI { op, a, imm, .. } => Op::BinaryRI {
+                    op,
+                    out: r,
+                    a: reg(a),
+                    imm,
+                },
+                Op::BinaryIR { op, imm, b, .. } => Op::BinaryIR {
+                    op,
+                    out: r,
+                    imm,
+                    b: reg(b),
+                },
+                Op::Custom { k, args, .. } => {
+                    let args = [reg(args[0]), reg(args[1]), reg(args[2])];
+                    Op::Custom { k, out: r, args }
+                }
+                Op::Copy { a, .. } => Op::Copy { out: r, a: reg(a) },
+            };
+            s.free.push(r);
+            s.ops.push(new);
+        }
+        let ops: Vec<Op> = s.ops.iter().rev().copied().collect();
+        Tape::from_ops(ops, count as usize, self.0.customs.clone())
+    }
+}
+
+/// Reusable buffers for [`Tape::simplify`].
+#[derive(Default)]
+struct Scratch {
+    new_of: Vec<u32>,
+    free: Vec<u32>,
+    ops: Vec<Op>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
 }
 
 fn op_out(op: &Op) -> u32 {
@@ -416,7 +401,8 @@ fn op_out(op: &Op) -> u32 {
         | Op::Binary { out, .. }
         | Op::BinaryRI { out, .. }
         | Op::BinaryIR { out, .. }
-        | Op::Custom { out, .. } => out,
+        | Op::Custom { out, .. }
+        | Op::Copy { out, .. } => out,
     }
 }
 

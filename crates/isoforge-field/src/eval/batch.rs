@@ -155,6 +155,10 @@ impl BatchEval {
                     o[len..].fill(0.0);
                 }
                 Op::Const { out, c } => r[out as usize].fill(c),
+                Op::Copy { out, a } => {
+                    let (o, a) = split1(r, out, a);
+                    o.copy_from_slice(a)
+                }
                 Op::Unary { op, out, a } => {
                     let (o, a) = split1(r, out, a);
                     unary(op, o, a)

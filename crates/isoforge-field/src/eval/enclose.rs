@@ -253,7 +253,10 @@ pub fn pow(a: Interval, b: Interval) -> (Interval, bool) {
     }
     let mut l = f64::INFINITY;
     let mut h = f64::NEG_INFINITY;
-    for x in [a.inf(), a.sup()] {
+    // inari reports a zero lower bound as -0; the base +0 is what the corner means
+    // (the -0 case is handled below).
+    let base_lo = if a.inf() == 0.0 { 0.0 } else { a.inf() };
+    for x in [base_lo, a.sup()] {
         for y in [b.inf(), b.sup()] {
             let v = x.powf(y);
             l = l.min(v);

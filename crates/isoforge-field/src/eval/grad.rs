@@ -31,6 +31,7 @@ impl Grad {
 }
 
 /// The value and derivative of a unary operation at `a`.
+#[inline(always)]
 fn unary(op: UnaryOp, a: Grad) -> Grad {
     let v = scalar::unary(op, a.v);
     let x = a.v;
@@ -67,17 +68,22 @@ fn unary(op: UnaryOp, a: Grad) -> Grad {
 }
 
 /// The value and derivative of a binary operation.
+#[inline(always)]
 fn binary(op: BinaryOp, a: Grad, b: Grad) -> Grad {
     let v = scalar::binary(op, a.v, b.v);
-    let zip = |f: &dyn Fn(f64, f64) -> f64| Grad {
-        v,
-        d: [f(a.d[0], b.d[0]), f(a.d[1], b.d[1]), f(a.d[2], b.d[2])],
-    };
+    #[inline(always)]
+    fn zip(v: f64, a: &Grad, b: &Grad, f: impl Fn(f64, f64) -> f64) -> Grad {
+        Grad {
+            v,
+            d: [f(a.d[0], b.d[0]), f(a.d[1], b.d[1]), f(a.d[2], b.d[2])],
+        }
+    }
+    let (a, b) = (&a, &b);
     match op {
-        BinaryOp::Add => zip(&|p, q| p + q),
-        BinaryOp::Sub => zip(&|p, q| p - q),
-        BinaryOp::Mul => zip(&|p, q| p * b.v + a.v * q),
-        BinaryOp::Div => zip(&|p, q| (p * b.v - a.v * q) / (b.v * b.v)),
+        BinaryOp::Add => zip(v, a, b, |p, q| p + q),
+        BinaryOp::Sub => zip(v, a, b, |p, q| p - q),
+        BinaryOp::Mul => zip(v, a, b, |p, q| p * b.v + a.v * q),
+        BinaryOp::Div => zip(v, a, b, |p, q| (p * b.v - a.v * q) / (b.v * b.v)),
         BinaryOp::Min | BinaryOp::Max => {
             if v.is_nan() {
                 Grad {
@@ -96,18 +102,23 @@ fn binary(op: BinaryOp, a: Grad, b: Grad) -> Grad {
         BinaryOp::Atan2 => {
             // d atan2(y, x) = (x dy - y dx) / (x^2 + y^2)
             let r2 = a.v * a.v + b.v * b.v;
-            zip(&|dy, dx| (b.v * dy - a.v * dx) / r2)
+            zip(v, a, b, |dy, dx| (b.v * dy - a.v * dx) / r2)
         }
         BinaryOp::Pow => {
             // d a^b = b a^(b-1) da + a^b ln(a) db; the db term only where b varies, so a
             // constant exponent at a = 0 does not give 0 * -inf.
             let ka = b.v * a.v.powf(b.v - 1.0);
             let kb = v * a.v.ln();
-            zip(&|p, q| if q == 0.0 { ka * p } else { ka * p + kb * q })
+            zip(
+                v,
+                a,
+                b,
+                |p, q| if q == 0.0 { ka * p } else { ka * p + kb * q },
+            )
         }
         BinaryOp::Mod => {
             let f = (a.v / b.v).floor();
-            zip(&|p, q| p - f * q)
+            zip(v, a, b, |p, q| p - f * q)
         }
     }
 }
@@ -143,6 +154,7 @@ impl GradEval {
                     r[out as usize] = g;
                 }
                 Op::Const { out, c } => r[out as usize] = Grad::constant(c),
+                Op::Copy { out, a } => r[out as usize] = r[a as usize],
                 Op::Unary { op, out, a } => r[out as usize] = unary(op, r[a as usize]),
                 Op::Binary { op, out, a, b } => {
                     r[out as usize] = binary(op, r[a as usize], r[b as usize])

@@ -24,6 +24,7 @@ pub struct IntervalEval {
 }
 
 /// An operation on one interval: `(enclosure, may be NaN)`.
+#[inline(never)]
 fn unary(op: UnaryOp, a: Interval) -> (Interval, bool) {
     if a.is_empty() {
         return (Interval::ENTIRE, true);
@@ -63,7 +64,20 @@ fn unary(op: UnaryOp, a: Interval) -> (Interval, bool) {
 }
 
 /// An operation on two intervals: `(enclosure, may be NaN)`.
+#[inline(never)]
 fn binary(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
+    // Fast path: bounded, non-empty operands cannot make + - * min max give NaN (no
+    // infinity meets a zero or an opposite infinity).
+    if a.is_common_interval() && b.is_common_interval() {
+        match op {
+            BinaryOp::Add => return (a + b, false),
+            BinaryOp::Sub => return (a - b, false),
+            BinaryOp::Mul => return (a * b, false),
+            BinaryOp::Min => return (a.min(b), false),
+            BinaryOp::Max => return (a.max(b), false),
+            _ => {}
+        }
+    }
     if a.is_empty() || b.is_empty() {
         return (Interval::ENTIRE, true);
     }
@@ -104,7 +118,11 @@ fn binary(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
 }
 
 /// The choice of a min or max given its operands' intervals and NaN bits.
+#[inline(always)]
 fn choose(op: BinaryOp, a: Interval, an: bool, b: Interval, bn: bool) -> Option<Choice> {
+    if !matches!(op, BinaryOp::Min | BinaryOp::Max) {
+        return None;
+    }
     let c = if an || bn {
         Choice::Both
     } else {
@@ -113,8 +131,7 @@ fn choose(op: BinaryOp, a: Interval, an: bool, b: Interval, bn: bool) -> Option<
             BinaryOp::Min if b.sup() < a.inf() => Choice::Right,
             BinaryOp::Max if a.inf() > b.sup() => Choice::Left,
             BinaryOp::Max if b.inf() > a.sup() => Choice::Right,
-            BinaryOp::Min | BinaryOp::Max => Choice::Both,
-            _ => return None,
+            _ => Choice::Both,
         }
     };
     Some(c)
@@ -154,6 +171,7 @@ impl IntervalEval {
                     };
                     (out, i, i.is_empty())
                 }
+                Op::Copy { out, a } => (out, r[a as usize], nr[a as usize]),
                 Op::Const { out, c } => {
                     if c.is_nan() {
                         (out, Interval::ENTIRE, true)
@@ -194,7 +212,10 @@ impl IntervalEval {
                 }
                 Op::Custom { k, out, args } => {
                     let ins = args.map(|a| r[a as usize]);
-                    let nan = args.iter().any(|&a| nr[a as usize]);
+                    // A callback handed an unbounded box may meet infinite points, where
+                    // its own arithmetic can give NaN (inf - inf): count that as possible.
+                    let nan =
+                        args.iter().any(|&a| nr[a as usize]) || ins.iter().any(|&i| unbounded(i));
                     let v = tape.customs()[k as usize].interval(ins);
                     if v.is_empty() {
                         (out, Interval::ENTIRE, true)

@@ -31,6 +31,7 @@ impl PointEval {
                     }
                 }
                 Op::Const { out, c } => r[out as usize] = c,
+                Op::Copy { out, a } => r[out as usize] = r[a as usize],
                 Op::Unary { op, out, a } => r[out as usize] = scalar::unary(op, r[a as usize]),
                 Op::Binary { op, out, a, b } => {
                     r[out as usize] = scalar::binary(op, r[a as usize], r[b as usize])
