@@ -100,7 +100,11 @@ fn face_edges(n: usize, side: usize) -> [usize; 4] {
 /// a plain face, two for an ambiguous one, ordered by the lower inside corner.
 fn face_pairs(signs: u8, n: usize, side: usize) -> Vec<[usize; 2]> {
     let edges = face_edges(n, side);
-    let crossing: Vec<usize> = edges.iter().copied().filter(|&e| crosses(signs, e)).collect();
+    let crossing: Vec<usize> = edges
+        .iter()
+        .copied()
+        .filter(|&e| crosses(signs, e))
+        .collect();
     match crossing.len() {
         2 => vec![[crossing[0], crossing[1]]],
         4 => {

@@ -106,8 +106,12 @@ pub fn cell_vertices(
                 }
                 let crossing_of = |e: usize| {
                     let (start, _) = edge_corners(e);
-                    let ci =
-                        corner_index(s, i + (start & 1), j + (start >> 1 & 1), k + (start >> 2 & 1));
+                    let ci = corner_index(
+                        s,
+                        i + (start & 1),
+                        j + (start >> 1 & 1),
+                        k + (start >> 2 & 1),
+                    );
                     crossings.get(edge_slot[(e / 4) * n + ci] as usize)
                 };
                 for q in qefs.iter_mut().take(case.patches as usize) {
@@ -196,12 +200,15 @@ pub fn emit(
     for edge in &blocks[me].owned {
         let a = edge.axis as usize;
         let (ab, ac) = other_axes(a);
-        let mut cells = [(0usize, CellOut {
-            cell: 0,
-            signs: 0,
-            vert: 0,
-            face: [NO_VERT; 3],
-        }); 4];
+        let mut cells = [(
+            0usize,
+            CellOut {
+                cell: 0,
+                signs: 0,
+                vert: 0,
+                face: [NO_VERT; 3],
+            },
+        ); 4];
         let mut found = true;
         for (slot, &(db, dc)) in cells.iter_mut().zip(AROUND.iter()) {
             let mut l = edge.at.map(i64::from);
@@ -214,7 +221,11 @@ pub fn emit(
                     l[v] += b;
                 }
             }
-            let blk = if off == [0; 3] { Some(me) } else { neighbour(off) };
+            let blk = if off == [0; 3] {
+                Some(me)
+            } else {
+                neighbour(off)
+            };
             let idx = (l[0] + b * (l[1] + b * l[2])) as u16;
             match blk.and_then(|bi| blocks[bi].cell(idx).map(|c| (bi, *c))) {
                 Some(x) => *slot = x,

@@ -276,7 +276,11 @@ pub fn crossings<S: Sampler>(
         let mut pos = start(edge);
         pos[a] += t * grid.cell;
         let mut outward = [0.0; 3];
-        outward[a] = if signs[edge.corner as usize] == 1 { 1.0 } else { -1.0 };
+        outward[a] = if signs[edge.corner as usize] == 1 {
+            1.0
+        } else {
+            -1.0
+        };
         let normal = normal_at(sampler, ev, local, clip, grid.cell, pos, outward, sc);
         out.push(Crossing { pos, normal });
     }

@@ -186,22 +186,24 @@ pub(crate) fn mesh_sampler<S: Sampler>(sampler: &S, settings: &MeshSettings) -> 
     let words = (s * s * s).div_ceil(64);
     let mut bits = vec![0u64; blocks.len() * words];
     let report = Reporter::new(progress, blocks.len(), 0.1, 0.4);
-    bits.par_chunks_mut(words).zip(blocks.par_iter()).for_each_init(
-        || (pool.take(), Scratch::default()),
-        |(guard, scratch), (out, block)| {
-            hermite::own_signs(
-                sampler,
-                guard.get(),
-                &block.local,
-                &clip,
-                &grid,
-                block.coords,
-                scratch,
-                out,
-            );
-            report.tick();
-        },
-    );
+    bits.par_chunks_mut(words)
+        .zip(blocks.par_iter())
+        .for_each_init(
+            || (pool.take(), Scratch::default()),
+            |(guard, scratch), (out, block)| {
+                hermite::own_signs(
+                    sampler,
+                    guard.get(),
+                    &block.local,
+                    &clip,
+                    &grid,
+                    block.coords,
+                    scratch,
+                    out,
+                );
+                report.tick();
+            },
+        );
 
     let neighbours: Vec<[Class; 27]> = blocks
         .par_iter()

@@ -8,8 +8,8 @@
 //! closed box holds both of the edge's corners, so that block's interval cannot be
 //! one-signed: such blocks are always kept.
 
-use isoforge_field::Interval;
 use isoforge_field::Bounds;
+use isoforge_field::Interval;
 use rayon::prelude::*;
 
 use super::sampler::{Clip, EvalPool, Sampler};
@@ -172,7 +172,11 @@ impl<S: Sampler> BuildCtx<'_, '_, S> {
         let f = self.sampler.interval(guard.get(), local, b);
         // F = max(f, d_box); an empty f interval means f is NaN everywhere: outside.
         let lo = f.inf().max(dlo);
-        let hi = if f.is_empty() { f64::INFINITY } else { f.sup().max(dhi) };
+        let hi = if f.is_empty() {
+            f64::INFINITY
+        } else {
+            f.sup().max(dhi)
+        };
         if lo >= 0.0 || lo.is_nan() {
             return Built::Empty;
         }

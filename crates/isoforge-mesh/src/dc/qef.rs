@@ -71,7 +71,11 @@ impl Qef {
                 x[i] += v[i] * proj;
             }
         }
-        if x.iter().all(|c| c.is_finite()) { x } else { m }
+        if x.iter().all(|c| c.is_finite()) {
+            x
+        } else {
+            m
+        }
     }
 }
 
@@ -139,7 +143,12 @@ mod tests {
     #[test]
     fn flat_patch_stays_at_mass_point_in_plane() {
         let mut q = Qef::default();
-        for p in [[0.0, 0.0, 0.5], [1.0, 0.0, 0.5], [0.0, 1.0, 0.5], [1.0, 1.0, 0.5]] {
+        for p in [
+            [0.0, 0.0, 0.5],
+            [1.0, 0.0, 0.5],
+            [0.0, 1.0, 0.5],
+            [1.0, 1.0, 0.5],
+        ] {
             q.add(p, [0.0, 0.0, 1.0]);
         }
         assert!(near(q.solve(), [0.5, 0.5, 0.5]));

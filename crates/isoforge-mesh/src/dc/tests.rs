@@ -4,8 +4,8 @@
 
 use std::collections::HashMap;
 
-use isoforge_field::Interval;
 use isoforge_field::Bounds;
+use isoforge_field::Interval;
 
 use super::sampler::Sampler;
 use super::{MeshSettings, mesh_sampler};
@@ -106,7 +106,11 @@ pub fn assert_closed_manifold(mesh: &Mesh, what: &str) -> f64 {
                 break;
             }
         }
-        assert_eq!(steps, next.len(), "{what}: vertex {v} link is not one cycle");
+        assert_eq!(
+            steps,
+            next.len(),
+            "{what}: vertex {v} link is not one cycle"
+        );
     }
     volume(mesh)
 }
@@ -137,7 +141,8 @@ fn trilinear(values: &[f64], p: [f64; 3]) -> f64 {
         i[a] = c.floor() as usize;
         t[a] = c - i[a] as f64;
     }
-    let at = |dx: usize, dy: usize, dz: usize| values[(i[0] + dx) + S * ((i[1] + dy) + S * (i[2] + dz))];
+    let at =
+        |dx: usize, dy: usize, dz: usize| values[(i[0] + dx) + S * ((i[1] + dy) + S * (i[2] + dz))];
     let mut v = 0.0;
     for c in 0..8 {
         let (dx, dy, dz) = (c & 1, c >> 1 & 1, c >> 2 & 1);
@@ -164,7 +169,11 @@ fn mesh_lattice(corners: &[([usize; 3], f64)], nan_grad: bool) -> Mesh {
 
 fn corner_value(inside: bool, c: usize) -> f64 {
     // Varied magnitudes so crossings are not all at edge midpoints.
-    if inside { -0.3 - 0.1 * c as f64 } else { 0.2 + 0.15 * c as f64 }
+    if inside {
+        -0.3 - 0.1 * c as f64
+    } else {
+        0.2 + 0.15 * c as f64
+    }
 }
 
 #[test]
@@ -232,7 +241,10 @@ fn nan_corners_count_as_outside() {
         let mesh = mesh_lattice(&corners, false);
         assert_closed_manifold(&mesh, &format!("nan code {code}"));
         for v in &mesh.vertices {
-            assert!(v.iter().all(|c| c.is_finite() && (6.0..=10.0).contains(c)), "{v:?}");
+            assert!(
+                v.iter().all(|c| c.is_finite() && (6.0..=10.0).contains(c)),
+                "{v:?}"
+            );
         }
     }
 }
@@ -254,7 +266,10 @@ fn sphere_volume_and_pruning() {
         assert!((vol - exact).abs() < tol * exact, "depth {depth}: {vol}");
         for v in &mesh.vertices {
             let r = v.iter().map(|c| f64::from(*c).powi(2)).sum::<f64>().sqrt();
-            assert!((r - 1.0).abs() < 3.0 / f64::from(1u32 << depth), "depth {depth}: r {r}");
+            assert!(
+                (r - 1.0).abs() < 3.0 / f64::from(1u32 << depth),
+                "depth {depth}: r {r}"
+            );
         }
     }
 }
@@ -300,7 +315,8 @@ fn nan_half_space_and_cone_through_axis() {
     let vol = assert_closed_manifold(&mesh, "sqrt(x)");
     assert!((vol - 1.0).abs() < 0.15, "{vol}");
     // sqrt(x²+y²) − (1 − |z|)/2: a double cone, gradient undefined on the z axis.
-    let s = FnSampler::new(|p: [f64; 3]| (p[0] * p[0] + p[1] * p[1]).sqrt() - (1.0 - p[2].abs()) / 2.0);
+    let s =
+        FnSampler::new(|p: [f64; 3]| (p[0] * p[0] + p[1] * p[1]).sqrt() - (1.0 - p[2].abs()) / 2.0);
     let mut s2 = s;
     s2.nan_grad = false;
     let mesh = mesh_sampler(&s2, &settings(-1.0, 1.0, 5));
@@ -314,11 +330,13 @@ fn gyroid_sphere_is_closed_manifold() {
         let g = x.sin() * y.cos() + y.sin() * z.cos() + z.sin() * x.cos();
         (g.abs() - 0.3).max(p[0] * p[0] + p[1] * p[1] + p[2] * p[2] - 1.0)
     };
-    for depth in [5u8, 6] {
+    for (depth, lo, hi) in [(5u8, 0.2, 1.0), (7, 0.79, 0.84)] {
         let mut s = FnSampler::new(gyroid);
         s.nan_grad = false;
         let mesh = mesh_sampler(&s, &settings(-1.5, 1.5, depth));
         let vol = assert_closed_manifold(&mesh, &format!("gyroid depth {depth}"));
-        assert!(vol > 0.5 && vol < 1.2, "{vol}");
+        // The sheet is about one cell thick at depth 5: a thinner volume is expected there;
+        // the reference (finest meshes) is 0.817.
+        assert!(vol > lo && vol < hi, "depth {depth}: {vol}");
     }
 }
