@@ -63,7 +63,6 @@ fn info_rejects_every_bad_script() {
 }
 
 #[test]
-#[ignore = "enable once `isoforge mesh` lands (branch dc)"]
 fn mesh_rejects_every_bad_script_and_writes_nothing() {
     fails_cleanly("mesh", |out| vec!["-o".into(), out.display().to_string()]);
 }
