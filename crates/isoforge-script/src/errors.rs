@@ -77,7 +77,13 @@ fn describe(err: &EvalAltResult) -> String {
                 Some(rest) => format!("^ ({rest}"),
                 None => sig.clone(),
             };
-            format!("no function {sig}: unknown name, or wrong number or types of arguments")
+            let name = sig.split(" (").next().unwrap_or(&sig);
+            match suggestion(name) {
+                Some(known) => format!("no function {sig}: did you mean {known}?"),
+                None => format!(
+                    "no function {sig}: unknown name, or wrong number or types of arguments"
+                ),
+            }
         }
         EvalAltResult::ErrorRuntime(msg, _) => match msg.clone().into_immutable_string() {
             Ok(s) => s.to_string(),
@@ -92,5 +98,115 @@ fn describe(err: &EvalAltResult) -> String {
             let suffix = format!(" ({})", other.position());
             text.strip_suffix(&suffix).unwrap_or(&text).to_string()
         }
+    }
+}
+
+/// The library's names, for "did you mean" hints.
+const KNOWN: [&str; 61] = [
+    "Sphere",
+    "Cube",
+    "Prism",
+    "Torus",
+    "Cyl",
+    "Cyyl",
+    "Cone",
+    "Ellip",
+    "Para",
+    "Close",
+    "HSpace",
+    "Tetrahedral",
+    "Sinus",
+    "Bug",
+    "Drope",
+    "Heart",
+    "TransX",
+    "TransY",
+    "TransZ",
+    "ScaleX",
+    "ScaleY",
+    "ScaleZ",
+    "ScaleXYZ",
+    "ReflectXY",
+    "ReflectZX",
+    "ReflectYZ",
+    "RotateRX",
+    "RotateRY",
+    "RotateRZ",
+    "RotateX",
+    "RotateY",
+    "RotateZ",
+    "Union",
+    "Intersect",
+    "Subtract",
+    "Morph",
+    "Blend",
+    "Combine",
+    "Max",
+    "Min",
+    "curve_fol_sphere",
+    "curve_fol_cyl",
+    "curve_fol_cyyl",
+    "curve_fol_box",
+    "sin",
+    "cos",
+    "tan",
+    "asin",
+    "acos",
+    "atan",
+    "atan2",
+    "exp",
+    "ln",
+    "sqrt",
+    "abs",
+    "min",
+    "max",
+    "square",
+    "floor",
+    "pow",
+    "DegToRad",
+];
+
+/// A library name close to `name` (a typo or wrong case), unless `name` is itself one.
+fn suggestion(name: &str) -> Option<&'static str> {
+    if KNOWN.contains(&name) {
+        return None;
+    }
+    let lower = name.to_lowercase();
+    KNOWN
+        .iter()
+        .map(|k| (edit_distance(&lower, &k.to_lowercase()), *k))
+        .filter(|(d, k)| *d <= 2.min(k.len() / 3).max(usize::from(lower.len() > 2)))
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, k)| k)
+}
+
+/// Levenshtein distance.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let cur = row[j + 1];
+            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
+            prev = cur;
+        }
+    }
+    row[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn suggests_near_names() {
+        assert_eq!(suggestion("Sphre"), Some("Sphere"));
+        assert_eq!(suggestion("sphere"), Some("Sphere"));
+        assert_eq!(suggestion("rotatey"), Some("RotateY"));
+        assert_eq!(suggestion("Sphere"), None);
+        assert_eq!(suggestion("frobnicate"), None);
+        assert_eq!(suggestion("q"), None);
     }
 }

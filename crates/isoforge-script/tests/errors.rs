@@ -42,7 +42,11 @@ fn syntax_error() {
 
 #[test]
 fn unknown_function() {
-    expect("unknown_function.rhai", ":3:1:", &["Sphre"]);
+    expect(
+        "unknown_function.rhai",
+        ":3:1:",
+        &["Sphre", "did you mean Sphere?"],
+    );
 }
 
 #[test]
