@@ -17,6 +17,10 @@
 //! number/Shape arithmetic with `^` as power and real division, the classic library,
 //! `param(..)` and `bounds(..)`. Scripts run sandboxed: an operation limit, a call-depth
 //! limit, no `import` and no `eval`, and output to stderr only.
+//!
+//! The path: source → `notation` (math precedence for `^`) → rhai compile and run with the
+//! bindings of `ops`, `library` and `params` → the resulting `Shape`, or a `ScriptError`
+//! located at `path:line:column` by `errors`. `region` finds or checks the model's box.
 
 use std::path::Path;
 use std::sync::{Arc, Mutex};

@@ -1,8 +1,9 @@
-//! Arithmetic and math for scripts: numbers and Shapes mix in `+ - * /`, unary `-` and `^`,
-//! and the math functions take either (`sin(2.0)` is a number, `sin(x)` a Shape).
+//! Arithmetic and math for scripts: numbers and Shapes mix in `+ - * /`, unary `-` and
+//! power (scripts write `^`; the notation pass hands rhai `**`), and the math functions take
+//! either (`sin(2.0)` is a number, `sin(x)` a Shape).
 //!
 //! Needs `Engine::set_fast_operators(false)`, or rhai would run its built-in integer `/`
-//! (9/4 == 2) and `^` (exclusive or) without looking at what is registered here.
+//! (9/4 == 2) and `**` without looking at what is registered here.
 
 use isoforge_field::Shape;
 use rhai::{Dynamic, Engine, FLOAT, INT};
