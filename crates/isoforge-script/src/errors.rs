@@ -51,13 +51,29 @@ pub fn eval_error(at: Locator, err: &EvalAltResult) -> ScriptError {
         inner = next;
     }
     let pos = inner.position();
-    let what = describe(inner);
+    let mut what = describe(inner);
+    if let EvalAltResult::ErrorStackOverflow(_) = inner
+        && let Some(name) = word_at(&at.map.source, pos)
+    {
+        what = format!("{what}, starting with the call to `{name}`");
+    }
     let mut msg = format!("{}: {what}", location(at, pos));
     for c in calls.iter().rev() {
         msg.push_str("\n  ");
         msg.push_str(c);
     }
     ScriptError(msg)
+}
+
+/// The identifier at a 1-based line and column of `source`, if one starts there.
+fn word_at(source: &str, pos: Position) -> Option<String> {
+    let line = source.lines().nth(pos.line()?.checked_sub(1)?)?;
+    let word: String = line
+        .chars()
+        .skip(pos.position()?.checked_sub(1)?)
+        .take_while(|c| c.is_alphanumeric() || *c == '_')
+        .collect();
+    (!word.is_empty()).then_some(word)
 }
 
 /// Rhai's message, with advice for the limits a model script runs into.

@@ -65,7 +65,11 @@ fn endless_loop() {
 
 #[test]
 fn deep_recursion() {
-    expect("deep_recursion.rhai", ":5:1:", &["nested", "recursion"]);
+    expect(
+        "deep_recursion.rhai",
+        ":5:1:",
+        &["nested", "recursion", "`grow`"],
+    );
 }
 
 #[test]
