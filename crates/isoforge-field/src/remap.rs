@@ -28,7 +28,10 @@ fn remap_node(shape: &Shape, xyz: [&Shape; 3], memo: &mut HashMap<usize, Shape>)
         }
         ShapeNode::Custom(field, inputs) => {
             let inputs = inputs.clone().map(|i| remap_node(&i, xyz, memo));
-            Shape(std::sync::Arc::new(ShapeNode::Custom(field.clone(), inputs)))
+            Shape(std::sync::Arc::new(ShapeNode::Custom(
+                field.clone(),
+                inputs,
+            )))
         }
     };
     memo.insert(shape.id(), out.clone());
