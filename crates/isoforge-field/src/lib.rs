@@ -8,6 +8,11 @@
 //! the branches an interval pass proved irrelevant, so children of an octree cell are
 //! evaluated with a shorter tape.
 //!
+//! Interval results always enclose the point values; where a point may be NaN (sqrt of a
+//! negative, 0 * inf, ...) the interval is `ENTIRE`. The enclosures inari lacks without
+//! `gmp` (sin, cos, tan, asin, acos, atan, atan2, exp, ln, powi, pow, mod) are in
+//! [`eval::enclose`]. [`vm::parse_vm`] reads the `.vm` benchmark models.
+//!
 //! ```
 //! use isoforge_field::{Shape, Tape, PointEval, IntervalEval, Interval};
 //! let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
@@ -39,3 +44,4 @@ pub use inari::Interval;
 pub use op::{BinaryOp, UnaryOp};
 pub use shape::{Shape, ShapeNode, Var};
 pub use tape::{Choice, Tape};
+pub use vm::{VmError, parse_vm};

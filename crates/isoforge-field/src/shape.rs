@@ -37,19 +37,81 @@ pub enum ShapeNode {
     Custom(Arc<dyn CustomField>, [Shape; 3]),
 }
 
+impl ShapeNode {
+    /// Moves the children that this node alone owns into `out`, leaving cheap placeholders,
+    /// so they can be dropped from a loop instead of by recursion.
+    fn take_unique_children(&mut self, out: &mut Vec<Shape>) {
+        let mut take = |s: &mut Shape| {
+            // A shared child is only decremented when dropped: no recursion to avoid.
+            if Arc::strong_count(&s.0) == 1 {
+                out.push(std::mem::replace(s, placeholder()));
+            }
+        };
+        match self {
+            ShapeNode::Var(_) | ShapeNode::Const(_) => {}
+            ShapeNode::Unary(_, a) => take(a),
+            ShapeNode::Binary(_, a, b) => {
+                take(a);
+                take(b)
+            }
+            ShapeNode::Custom(_, ins) => ins.iter_mut().for_each(take),
+        }
+    }
+}
+
+/// A shared constant node put in place of children taken out for iterative dropping.
+fn placeholder() -> Shape {
+    static P: std::sync::LazyLock<Shape> =
+        std::sync::LazyLock::new(|| Shape(Arc::new(ShapeNode::Const(0.0))));
+    P.clone()
+}
+
+impl Drop for ShapeNode {
+    /// Drops a deep chain (a 100,000-long min chain, say) without one stack frame per
+    /// level: children owned only by this node are unlinked and dropped from a loop.
+    fn drop(&mut self) {
+        let mut stack = Vec::new();
+        self.take_unique_children(&mut stack);
+        while let Some(s) = stack.pop() {
+            if let Some(mut node) = Arc::into_inner(s.0) {
+                node.take_unique_children(&mut stack);
+                // `node` now has only placeholder or shared children: dropping it is flat.
+            }
+        }
+    }
+}
+
 /// A field f(x, y, z): negative inside, positive outside. Cheap to clone.
 #[derive(Clone)]
 pub struct Shape(pub(crate) Arc<ShapeNode>);
 
 impl fmt::Debug for Shape {
+    /// Prints the expression; below 32 levels of nesting it prints `..` (a deep chain would
+    /// otherwise recurse once per level).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.node() {
-            ShapeNode::Var(v) => write!(f, "{v:?}"),
-            ShapeNode::Const(c) => write!(f, "{c}"),
-            ShapeNode::Unary(op, a) => write!(f, "{op:?}({a:?})"),
-            ShapeNode::Binary(op, a, b) => write!(f, "{op:?}({a:?}, {b:?})"),
-            ShapeNode::Custom(c, _) => write!(f, "{}(..)", c.name()),
+        fn go(s: &Shape, f: &mut fmt::Formatter<'_>, depth: usize) -> fmt::Result {
+            if depth > 32 {
+                return write!(f, "..");
+            }
+            match s.node() {
+                ShapeNode::Var(v) => write!(f, "{v:?}"),
+                ShapeNode::Const(c) => write!(f, "{c}"),
+                ShapeNode::Unary(op, a) => {
+                    write!(f, "{op:?}(")?;
+                    go(a, f, depth + 1)?;
+                    write!(f, ")")
+                }
+                ShapeNode::Binary(op, a, b) => {
+                    write!(f, "{op:?}(")?;
+                    go(a, f, depth + 1)?;
+                    write!(f, ", ")?;
+                    go(b, f, depth + 1)?;
+                    write!(f, ")")
+                }
+                ShapeNode::Custom(c, _) => write!(f, "{}(..)", c.name()),
+            }
         }
+        go(self, f, 0)
     }
 }
 
