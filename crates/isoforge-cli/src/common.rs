@@ -64,6 +64,9 @@ impl ModelArgs {
                     .with_context(|| format!("{}: no region", self.model.display()))?,
             },
         };
+        // A region with nothing in it would give an empty mesh or blank layers: say so.
+        isoforge_script::ensure_not_empty(&model.shape, &bounds)
+            .with_context(|| self.model.display().to_string())?;
         Ok(LoadedModel { model, bounds })
     }
 }

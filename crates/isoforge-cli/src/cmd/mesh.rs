@@ -1,18 +1,178 @@
-//! `isoforge mesh`.
+//! `isoforge mesh`: a model to a closed, manifold triangle mesh file.
 
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::Instant;
 
-use anyhow::{Result, bail};
+use anyhow::{Context as _, Result, bail};
 use clap::Args;
+use isoforge_mesh::dc::MAX_DEPTH;
+use isoforge_mesh::{MeshFormat, MeshSettings, check, write_mesh};
+use serde_json::json;
 
-use crate::common::Global;
+use crate::common::{Global, ModelArgs, print_json, progress_bar};
+
+/// The default finest level: the region's longest side in 256 cells.
+const DEFAULT_DEPTH: u8 = 8;
 
 /// Arguments of `isoforge mesh`.
 #[derive(Args, Debug)]
-pub struct MeshArgs {}
+pub struct MeshArgs {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Output file (default: the model's name with .stl, beside the model).
+    #[arg(short, long, value_name = "OUT")]
+    output: Option<PathBuf>,
+    /// Finest cell size in mm (default: the region's longest side / 256).
+    #[arg(long, value_name = "MM", conflicts_with = "depth")]
+    resolution: Option<f64>,
+    /// Finest level: 2^N cells along the region's longest side.
+    #[arg(long, value_name = "N")]
+    depth: Option<u8>,
+    /// stl (binary), stl-ascii, 3mf, obj or ply (default: from OUT's extension, else stl).
+    #[arg(long, value_name = "F")]
+    format: Option<String>,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+}
+
+/// A usage error: message, exit status 2.
+fn usage(message: String) -> Result<ExitCode> {
+    eprintln!("error: {message}");
+    Ok(ExitCode::from(2))
+}
+
+/// The depth for a cell size: the first level whose cells are no larger.
+fn depth_for(longest: f64, resolution: f64) -> Option<u8> {
+    (0..=MAX_DEPTH).find(|&d| longest / f64::from(1u32 << d) <= resolution * (1.0 + 1e-9))
+}
+
+fn extension(format: MeshFormat) -> &'static str {
+    match format {
+        MeshFormat::Stl | MeshFormat::StlAscii => "stl",
+        MeshFormat::ThreeMf => "3mf",
+        MeshFormat::Obj => "obj",
+        MeshFormat::Ply => "ply",
+    }
+}
+
+fn default_output(model: &Path, format: MeshFormat) -> PathBuf {
+    model.with_extension(extension(format))
+}
 
 /// Runs the command.
 pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
-    let _ = (args, global);
-    bail!("not built yet")
+    let start = Instant::now();
+    // Usage checks first, before any work.
+    let format = match (&args.format, &args.output) {
+        (Some(name), _) => match MeshFormat::from_name(name) {
+            Some(f) => f,
+            None => {
+                return usage(format!(
+                    "--format {name:?}: expected stl, stl-ascii, 3mf, obj or ply"
+                ));
+            }
+        },
+        (None, Some(out)) => MeshFormat::from_extension(out).unwrap_or(MeshFormat::Stl),
+        (None, None) => MeshFormat::Stl,
+    };
+    if let Some(r) = args.resolution
+        && !(r.is_finite() && r > 0.0)
+    {
+        return usage(format!("--resolution {r}: expected a positive size in mm"));
+    }
+    if let Some(d) = args.depth
+        && d > MAX_DEPTH
+    {
+        return usage(format!("--depth {d}: at most {MAX_DEPTH}"));
+    }
+    if args.threads == Some(0) {
+        return usage("--threads 0: expected at least 1".into());
+    }
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(&args.model.model, format));
+
+    let loaded = args.model.load()?;
+    let bounds = loaded.bounds;
+    let depth = match (args.depth, args.resolution) {
+        (Some(d), _) => d,
+        (None, Some(r)) => match depth_for(bounds.longest_side(), r) {
+            Some(d) => d,
+            None => {
+                return usage(format!(
+                    "--resolution {r}: too fine for a region {} mm long (at most 2^{MAX_DEPTH} cells)",
+                    bounds.longest_side()
+                ));
+            }
+        },
+        (None, None) => DEFAULT_DEPTH,
+    };
+
+    let bar = progress_bar(global, 1000, "meshing");
+    let mut settings = MeshSettings::new(bounds, depth);
+    settings.threads = args.threads.unwrap_or(0);
+    let bar_cb = bar.clone();
+    settings.progress = Some(Arc::new(move |f: f64| {
+        bar_cb.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64)
+    }));
+    let mesh = isoforge_mesh::dc::try_mesh_shape(&loaded.model.shape, &settings)?;
+    bar.finish_and_clear();
+    if mesh.triangles.is_empty() {
+        bail!(
+            "{}: nothing is inside the region {:?} to {:?} (the field is not negative anywhere there)",
+            args.model.model.display(),
+            bounds.min,
+            bounds.max
+        );
+    }
+    let report = check(&mesh);
+    write_mesh(&mesh, &output, format)
+        .with_context(|| format!("{}: cannot write the mesh", output.display()))?;
+    let seconds = start.elapsed().as_secs_f64();
+    if global.json {
+        print_json(&json!({
+            "triangles": report.triangles,
+            "vertices": report.vertices,
+            "volume": report.volume,
+            "area": report.area,
+            "bounds": report.bounds,
+            "watertight": report.watertight,
+            "manifold": report.manifold,
+            "seconds": seconds,
+        }));
+    } else if !global.quiet {
+        println!(
+            "{}: {} triangles, {} vertices, volume {:.6}, depth {depth}, {:.2} s",
+            output.display(),
+            report.triangles,
+            report.vertices,
+            report.volume,
+            seconds
+        );
+    }
+    if !report.is_closed_manifold() {
+        eprintln!(
+            "error: the mesh is not closed and manifold: {}",
+            report.problems().join("; ")
+        );
+        return Ok(ExitCode::from(1));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resolution_picks_the_first_fine_enough_depth() {
+        assert_eq!(depth_for(3.0, 3.0 / 256.0), Some(8));
+        assert_eq!(depth_for(3.0, 0.02), Some(8));
+        assert_eq!(depth_for(3.0, 10.0), Some(0));
+        assert_eq!(depth_for(3.0, 1e-9), None);
+    }
 }
