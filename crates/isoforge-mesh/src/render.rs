@@ -343,11 +343,15 @@ impl Tile<'_> {
             iv(cam.v(f64::from(r.y0)), cam.v(f64::from(r.y1))),
             iv(a, b),
         ];
-        let f = self.ev.interval.eval(tape, bx);
-        if f.inf() > 0.0 {
+        // NaN counts as outside (nothing to show there), as in `march`: a box whose
+        // defined values are all positive is empty even if some points are NaN, and only
+        // a box without NaN can be full. Without this, a model undefined on part of the
+        // region would leave every box there undecided down to the finest level.
+        let (f, nan) = self.ev.interval.eval_nan(tape, bx);
+        if f.is_empty() || f.inf() > 0.0 {
             return; // empty
         }
-        if f.sup() < 0.0 {
+        if !nan && f.sup() < 0.0 {
             // Full: every open pixel meets the surface at this box's front face.
             for y in r.y0..r.y1 {
                 for x in r.x0..r.x1 {
@@ -521,6 +525,25 @@ mod tests {
         for (x, y) in [(4, 4), (12, 5), (6, 11)] {
             assert_eq!(img.pixel(x, y), centre, "a flat face shades evenly");
         }
+    }
+
+    #[test]
+    fn undefined_parts_show_as_background() {
+        // sqrt(x) is NaN for x < 0: the left half of a top view shows nothing, the right
+        // half the slab x > 0.25 of the (clipped) half space.
+        let (x, y) = (Shape::x(), Shape::y());
+        let f = 0.5 - x.sqrt() + y * 0.0;
+        let img = render(
+            &f,
+            &region(1.0),
+            &RenderSettings {
+                view: View::Top,
+                ..RenderSettings::new(40, 40)
+            },
+        );
+        assert!(is_background(img.pixel(8, 20)));
+        assert!(is_background(img.pixel(22, 20)));
+        assert!(!is_background(img.pixel(34, 20)));
     }
 
     #[test]
