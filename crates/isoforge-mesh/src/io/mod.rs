@@ -218,11 +218,17 @@ pub fn write_mesh(mesh: &Mesh, path: &Path, format: MeshFormat) -> Result<(), Me
     Ok(())
 }
 
-/// Writes a value for text formats: shortest text that reads back to the same f32, with
-/// `-0.0` written as `0` so readers that weld by bit pattern see one vertex.
-pub(crate) fn fmt_coord(v: f32) -> String {
-    let v = v + 0.0;
-    format!("{v}")
+/// A coordinate for text formats: shortest text that reads back to the same f32, with
+/// `-0.0` written as `0` so readers that weld by bit pattern see one vertex. A `Display`
+/// value, not a `String`, so writers format straight into their buffer.
+pub(crate) fn fmt_coord(v: f32) -> impl std::fmt::Display {
+    struct Coord(f32);
+    impl std::fmt::Display for Coord {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            std::fmt::Display::fmt(&(self.0 + 0.0), f)
+        }
+    }
+    Coord(v)
 }
 
 /// Parses one coordinate token of a text format: finite f32 or an error.

@@ -135,8 +135,14 @@ pub fn read_ascii(bytes: &[u8]) -> Result<Mesh, ParseError> {
     let mut facet_state = 0u8;
     while let Some((line, tok)) = toks.next() {
         last_line = line;
-        let kw = tok.to_ascii_lowercase();
-        match (kw.as_str(), in_solid, facet_state) {
+        // Keywords are matched without case and without allocating (20+ tokens a facet).
+        let kw = [
+            "solid", "endsolid", "facet", "outer", "vertex", "endloop", "endfacet",
+        ]
+        .into_iter()
+        .find(|k| k.eq_ignore_ascii_case(tok))
+        .unwrap_or("");
+        match (kw, in_solid, facet_state) {
             ("solid", false, _) => {
                 in_solid = true;
                 solids += 1;
