@@ -100,6 +100,9 @@ pub struct RenderSettings {
     /// The finest depth step is the depth range / 2^depth. `None` picks one about a
     /// pixel deep.
     pub depth: Option<u8>,
+    /// Frame the picture on the model (found by a coarse first pass) rather than on the
+    /// whole region.
+    pub fit: bool,
 }
 
 impl RenderSettings {
@@ -110,6 +113,7 @@ impl RenderSettings {
             width,
             height,
             depth: None,
+            fit: true,
         }
     }
 }
@@ -152,6 +156,31 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// A camera showing `u` x `v` (view-space ranges) in a `width` x `height` image with
+    /// a 4 % margin, keeping the aspect; the depth range is `w`.
+    fn fit(u: [f64; 2], v: [f64; 2], w: [f64; 2], size: (u32, u32), depth: Option<u8>) -> Self {
+        let (width, height) = (f64::from(size.0), f64::from(size.1));
+        let px = ((u[1] - u[0]) / width).max((v[1] - v[0]) / height) * 1.08;
+        let px = if px > 0.0 { px } else { f64::MIN_POSITIVE };
+        let depth_bits = depth.map_or_else(
+            || ((w[1] - w[0]) / px).log2().ceil().clamp(4.0, 16.0) as i32,
+            |d| i32::from(d.clamp(1, 24)),
+        );
+        Camera {
+            u0: 0.5 * (u[0] + u[1]) - px * width * 0.5,
+            v0: 0.5 * (v[0] + v[1]) + px * height * 0.5,
+            px,
+            w_lo: w[0],
+            w_hi: w[1],
+            dw: (w[1] - w[0]) / f64::from(2u32.pow(depth_bits as u32)),
+        }
+    }
+}
+
+/// Side of the first, coarse pass that finds where the model is, to frame it.
+const FIT_PASS: u32 = 96;
+
 /// Renders a shaded picture of `shape` over the region `bounds`.
 pub fn render(shape: &Shape, bounds: &Bounds, settings: &RenderSettings) -> Image {
     let width = settings.width.max(1);
@@ -171,20 +200,6 @@ pub fn render(shape: &Shape, bounds: &Bounds, settings: &RenderSettings) -> Imag
             hi[r] = hi[r].max(c);
         }
     }
-    // Fit u x v into the image with a 4 % margin, keeping the aspect.
-    let px = ((hi[0] - lo[0]) / f64::from(width)).max((hi[1] - lo[1]) / f64::from(height)) * 1.08;
-    let depth_bits = settings.depth.map_or_else(
-        || ((hi[2] - lo[2]) / px).log2().ceil().clamp(4.0, 16.0) as i32,
-        |d| i32::from(d.clamp(1, 24)),
-    );
-    let cam = Camera {
-        u0: -px * f64::from(width) * 0.5,
-        v0: px * f64::from(height) * 0.5,
-        px,
-        w_lo: lo[2],
-        w_hi: hi[2],
-        dw: (hi[2] - lo[2]) / f64::from(2u32.pow(depth_bits as u32)),
-    };
 
     // Clip to the region, then substitute world coordinates by view ones:
     // p = centre + u * frame[0] + v * frame[1] + w * frame[2].
@@ -205,10 +220,103 @@ pub fn render(shape: &Shape, bounds: &Bounds, settings: &RenderSettings) -> Imag
         [0, 1, 2].map(|a| &x * frame[0][a] + &y * frame[1][a] + &z * frame[2][a] + centre[a]);
     let tape = Tape::new(&clipped.remap(&world[0], &world[1], &world[2]));
 
+    let (u, v, w) = ([lo[0], hi[0]], [lo[1], hi[1]], [lo[2], hi[2]]);
+    let mut cam = Camera::fit(u, v, w, (width, height), settings.depth);
+    if settings.fit {
+        // A coarse pass over the whole region finds the model's outline; the picture is
+        // then framed on it (grown by a coarse pixel each way, so nothing is cut off).
+        let scale = f64::from(FIT_PASS) / f64::from(width.max(height));
+        let (cw, ch) = (
+            ((f64::from(width) * scale).ceil() as u32).clamp(1, FIT_PASS),
+            ((f64::from(height) * scale).ceil() as u32).clamp(1, FIT_PASS),
+        );
+        let coarse = Camera::fit(u, v, w, (cw, ch), None);
+        let hits = trace(&tape, &coarse, (cw, ch), |_, rect, hits| {
+            (rect, hits.to_vec())
+        });
+        let mut seen = [u32::MAX, u32::MAX, 0, 0];
+        for (rect, hits) in hits {
+            for (i, h) in hits.iter().enumerate() {
+                if !h.is_nan() {
+                    let (px, py) = (rect.x0 + i as u32 % rect.w(), rect.y0 + i as u32 / rect.w());
+                    seen = [
+                        seen[0].min(px),
+                        seen[1].min(py),
+                        seen[2].max(px + 1),
+                        seen[3].max(py + 1),
+                    ];
+                }
+            }
+        }
+        if seen[0] < seen[2] {
+            let fu = [
+                coarse.u(f64::from(seen[0]) - 1.0),
+                coarse.u(f64::from(seen[2]) + 1.0),
+            ];
+            let fv = [
+                coarse.v(f64::from(seen[3]) + 1.0),
+                coarse.v(f64::from(seen[1]) - 1.0),
+            ];
+            cam = Camera::fit(fu, fv, w, (width, height), settings.depth);
+        }
+    }
+
+    let light = normalize([-0.45, 0.55, 0.7]);
+    let tiles = trace(&tape, &cam, (width, height), |ev, rect, hits| {
+        let mut rgb = Vec::with_capacity(hits.len() * 3);
+        for (i, &w) in hits.iter().enumerate() {
+            let colour = if w.is_nan() {
+                BACKGROUND
+            } else {
+                let px_x = rect.x0 + i as u32 % rect.w();
+                let px_y = rect.y0 + i as u32 / rect.w();
+                let p = [
+                    cam.u(f64::from(px_x) + 0.5),
+                    cam.v(f64::from(px_y) + 0.5),
+                    w,
+                ];
+                let g = ev.grad.eval(&tape, p);
+                let n = normalize(g.d);
+                // A NaN or zero gradient (a crease, a singular point): face the viewer.
+                let n = if n.iter().all(|c| c.is_finite()) {
+                    n
+                } else {
+                    [0.0, 0.0, 1.0]
+                };
+                let lambert = dot(n, light).max(0.0);
+                BASE.map(|c| c * (AMBIENT + (1.0 - AMBIENT) * lambert))
+            };
+            rgb.extend(colour.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8));
+        }
+        (rect, rgb)
+    });
+
+    let mut pixels = vec![0u8; width as usize * height as usize * 3];
+    for (rect, rgb) in tiles {
+        for (row, chunk) in rgb.chunks_exact(rect.w() as usize * 3).enumerate() {
+            let y = rect.y0 as usize + row;
+            let start = (y * width as usize + rect.x0 as usize) * 3;
+            pixels[start..start + chunk.len()].copy_from_slice(chunk);
+        }
+    }
+    Image {
+        width,
+        height,
+        pixels,
+    }
+}
+
+/// Finds every pixel's first hit, tile by tile over rayon, and hands each tile's hit
+/// depths (NaN: background) to `finish` on the same thread.
+fn trace<T: Send>(
+    tape: &Tape,
+    cam: &Camera,
+    (width, height): (u32, u32),
+    finish: impl Fn(&mut Evals, Rect, &[f64]) -> T + Sync,
+) -> Vec<T> {
     let tiles_x = width.div_ceil(TILE);
     let tiles_y = height.div_ceil(TILE);
-    let light = normalize([-0.45, 0.55, 0.7]);
-    let tiles: Vec<(u32, u32, Vec<u8>)> = (0..tiles_x * tiles_y)
+    (0..tiles_x * tiles_y)
         .into_par_iter()
         .map_init(Evals::new, |ev, t| {
             let (tx, ty) = (t % tiles_x * TILE, t / tiles_x * TILE);
@@ -220,56 +328,15 @@ pub fn render(shape: &Shape, bounds: &Bounds, settings: &RenderSettings) -> Imag
             };
             let mut hits = vec![f64::NAN; (rect.w() * rect.h()) as usize];
             let mut tile = Tile {
-                cam: &cam,
+                cam,
                 rect,
                 hits: &mut hits,
                 ev,
             };
-            tile.visit(&tape, rect, cam.w_lo, cam.w_hi);
-            let mut rgb = Vec::with_capacity(hits.len() * 3);
-            for (i, &w) in hits.iter().enumerate() {
-                let colour = if w.is_nan() {
-                    BACKGROUND
-                } else {
-                    let px_x = rect.x0 + i as u32 % rect.w();
-                    let px_y = rect.y0 + i as u32 / rect.w();
-                    let p = [
-                        cam.u(f64::from(px_x) + 0.5),
-                        cam.v(f64::from(px_y) + 0.5),
-                        w,
-                    ];
-                    let g = ev.grad.eval(&tape, p);
-                    let n = normalize(g.d);
-                    // A NaN or zero gradient (a crease, a singular point): face the viewer.
-                    let n = if n.iter().all(|c| c.is_finite()) {
-                        n
-                    } else {
-                        [0.0, 0.0, 1.0]
-                    };
-                    let lambert = dot(n, light).max(0.0);
-                    BASE.map(|c| c * (AMBIENT + (1.0 - AMBIENT) * lambert))
-                };
-                rgb.extend(colour.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8));
-            }
-            (t % tiles_x, t / tiles_x, rgb)
+            tile.visit(tape, rect, cam.w_lo, cam.w_hi);
+            finish(ev, rect, &hits)
         })
-        .collect();
-
-    let mut pixels = vec![0u8; width as usize * height as usize * 3];
-    for (tx, ty, rgb) in tiles {
-        let x0 = tx * TILE;
-        let w = (x0 + TILE).min(width) - x0;
-        for (row, chunk) in rgb.chunks_exact(w as usize * 3).enumerate() {
-            let y = ty * TILE + row as u32;
-            let start = (y as usize * width as usize + x0 as usize) * 3;
-            pixels[start..start + chunk.len()].copy_from_slice(chunk);
-        }
-    }
-    Image {
-        width,
-        height,
-        pixels,
-    }
+        .collect()
 }
 
 /// Per-thread evaluators.
@@ -538,6 +605,7 @@ mod tests {
             &region(1.0),
             &RenderSettings {
                 view: View::Top,
+                fit: false,
                 ..RenderSettings::new(40, 40)
             },
         );

@@ -54,6 +54,9 @@ pub struct RenderArgs {
     /// (default: about one pixel).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=24))]
     depth: Option<u8>,
+    /// Frame the whole region, not just the model in it.
+    #[arg(long)]
+    whole_region: bool,
 }
 
 /// The largest side accepted: 16k pixels (a 16k x 16k RGB image is already 768 MiB).
@@ -85,6 +88,7 @@ pub fn run(args: RenderArgs, global: &Global) -> Result<ExitCode> {
         width: args.size.0,
         height: args.size.1,
         depth: args.depth,
+        fit: !args.whole_region,
     };
     let spinner = crate::common::progress_bar(global, 1, "render");
     let image = render(&loaded.model.shape, &loaded.bounds, &settings);

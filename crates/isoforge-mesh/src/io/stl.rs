@@ -242,6 +242,8 @@ pub fn write_binary(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
 
 /// Writes ASCII STL; coordinates are written so they read back to the same f32.
 pub fn write_ascii(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
+    // Dozens of small writes a facet: buffer them here, whatever `w` is.
+    let mut w = std::io::BufWriter::with_capacity(1 << 16, w);
     writeln!(w, "solid isoforge")?;
     for &t in &mesh.triangles {
         let n = mesh.triangle_normal(t);
@@ -266,5 +268,6 @@ pub fn write_ascii(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
         writeln!(w, "    endloop")?;
         writeln!(w, "  endfacet")?;
     }
-    writeln!(w, "endsolid isoforge")
+    writeln!(w, "endsolid isoforge")?;
+    w.flush()
 }
