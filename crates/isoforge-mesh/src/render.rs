@@ -180,6 +180,8 @@ impl Camera {
 
 /// Side of the first, coarse pass that finds where the model is, to frame it.
 const FIT_PASS: u32 = 96;
+/// Coarse pixels added around the outline the first pass found.
+const FIT_PAD: f64 = 3.0;
 
 /// Renders a shaded picture of `shape` over the region `bounds`.
 pub fn render(shape: &Shape, bounds: &Bounds, settings: &RenderSettings) -> Image {
@@ -249,13 +251,16 @@ pub fn render(shape: &Shape, bounds: &Bounds, settings: &RenderSettings) -> Imag
             }
         }
         if seen[0] < seen[2] {
+            // Thin parts (a cone's tip) can slip between coarse samples: grow the outline
+            // by a few coarse pixels, but never past the region.
+            let pad = FIT_PAD;
             let fu = [
-                coarse.u(f64::from(seen[0]) - 1.0),
-                coarse.u(f64::from(seen[2]) + 1.0),
+                coarse.u(f64::from(seen[0]) - pad).max(u[0]),
+                coarse.u(f64::from(seen[2]) + pad).min(u[1]),
             ];
             let fv = [
-                coarse.v(f64::from(seen[3]) + 1.0),
-                coarse.v(f64::from(seen[1]) - 1.0),
+                coarse.v(f64::from(seen[3]) + pad).max(v[0]),
+                coarse.v(f64::from(seen[1]) - pad).min(v[1]),
             ];
             cam = Camera::fit(fu, fv, w, (width, height), settings.depth);
         }
