@@ -93,21 +93,26 @@ pub fn report_text(file: &str, r: &MeshReport) -> String {
     row("volume", format!("{:.6} mm³", r.volume));
     row("area", format!("{:.6} mm²", r.area));
     match r.bounds {
-        Some([lo, hi]) => row(
-            "bounds",
-            format!(
-                "[{}, {}, {}] to [{}, {}, {}] ({} x {} x {} mm)",
-                lo[0],
-                lo[1],
-                lo[2],
-                hi[0],
-                hi[1],
-                hi[2],
-                hi[0] - lo[0],
-                hi[1] - lo[1],
-                hi[2] - lo[2]
-            ),
-        ),
+        // Vertices are f32: print them as f32 so the numbers are the file's, not the
+        // f64 widening's 17 digits.
+        Some([lo, hi]) => {
+            let (lo, hi) = (lo.map(|v| v as f32), hi.map(|v| v as f32));
+            row(
+                "bounds",
+                format!(
+                    "[{}, {}, {}] to [{}, {}, {}] ({} x {} x {} mm)",
+                    lo[0],
+                    lo[1],
+                    lo[2],
+                    hi[0],
+                    hi[1],
+                    hi[2],
+                    hi[0] - lo[0],
+                    hi[1] - lo[1],
+                    hi[2] - lo[2]
+                ),
+            )
+        }
         None => row("bounds", "none (no vertices)".into()),
     }
     row("watertight", yes_no(r.watertight));
