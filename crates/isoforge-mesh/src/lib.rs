@@ -24,3 +24,4 @@ pub use check::{MeshReport, check};
 pub use dc::{MeshSettings, mesh_shape};
 pub use io::{MeshFormat, MeshIoError, read_mesh, write_mesh};
 pub use mesh::Mesh;
+pub use render::{Image, RenderSettings, View, render};

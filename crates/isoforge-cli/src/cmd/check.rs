@@ -1,18 +1,128 @@
-//! `isoforge check`.
+//! `isoforge check`: read a mesh file and report whether it is printable (closed, manifold,
+//! consistently oriented), with its figures.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
+use isoforge_mesh::{MeshReport, check, read_mesh};
+use serde_json::json;
 
-use crate::common::Global;
+use crate::common::{Global, print_json};
 
 /// Arguments of `isoforge check`.
 #[derive(Args, Debug)]
-pub struct CheckArgs {}
+#[command(
+    after_help = "Exit status: 0 closed and manifold, 1 not (the report says why), \
+                        2 the file cannot be read."
+)]
+pub struct CheckArgs {
+    /// The mesh file: STL (binary or ASCII), 3MF, OBJ or PLY.
+    pub mesh: PathBuf,
+}
 
 /// Runs the command.
 pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
-    let _ = (args, global);
-    bail!("not built yet")
+    let mesh = match read_mesh(&args.mesh) {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Ok(ExitCode::from(2));
+        }
+    };
+    let report = check(&mesh);
+    let name = args.mesh.display().to_string();
+    if global.json {
+        print_json(&report_json(&name, &report));
+    } else if !global.quiet {
+        print!("{}", report_text(&name, &report));
+    }
+    Ok(if report.is_closed_manifold() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
+/// The report as the JSON object `--json` prints.
+pub fn report_json(file: &str, r: &MeshReport) -> serde_json::Value {
+    json!({
+        "file": file,
+        "triangles": r.triangles,
+        "vertices": r.vertices,
+        "unused_vertices": r.unused_vertices,
+        "components": r.components,
+        "boundary_edges": r.boundary_edges,
+        "non_manifold_edges": r.non_manifold_edges,
+        "inconsistent_edges": r.inconsistent_edges,
+        "degenerate_triangles": r.degenerate_triangles,
+        "non_manifold_vertices": r.non_manifold_vertices,
+        "bad_indices": r.bad_indices,
+        "volume": r.volume,
+        "area": r.area,
+        "bounds": r.bounds,
+        "watertight": r.watertight,
+        "manifold": r.manifold,
+        "closed_manifold": r.is_closed_manifold(),
+        "problems": r.problems(),
+    })
+}
+
+/// The readable report.
+pub fn report_text(file: &str, r: &MeshReport) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let verdict = if r.is_closed_manifold() {
+        "closed and manifold"
+    } else {
+        "NOT closed and manifold"
+    };
+    let _ = writeln!(s, "{file}: {verdict}");
+    let mut row = |label: &str, value: String| {
+        let _ = writeln!(s, "  {label:<24}{value}");
+    };
+    row("triangles", r.triangles.to_string());
+    row("vertices", r.vertices.to_string());
+    row("components", r.components.to_string());
+    row("boundary edges", r.boundary_edges.to_string());
+    row("non-manifold edges", r.non_manifold_edges.to_string());
+    row("inconsistent edges", r.inconsistent_edges.to_string());
+    row("non-manifold vertices", r.non_manifold_vertices.to_string());
+    row("degenerate triangles", r.degenerate_triangles.to_string());
+    row("volume", format!("{:.6} mm³", r.volume));
+    row("area", format!("{:.6} mm²", r.area));
+    match r.bounds {
+        // Vertices are f32: print them as f32 so the numbers are the file's, not the
+        // f64 widening's 17 digits.
+        Some([lo, hi]) => {
+            let (lo, hi) = (lo.map(|v| v as f32), hi.map(|v| v as f32));
+            row(
+                "bounds",
+                format!(
+                    "[{}, {}, {}] to [{}, {}, {}] ({} x {} x {} mm)",
+                    lo[0],
+                    lo[1],
+                    lo[2],
+                    hi[0],
+                    hi[1],
+                    hi[2],
+                    hi[0] - lo[0],
+                    hi[1] - lo[1],
+                    hi[2] - lo[2]
+                ),
+            )
+        }
+        None => row("bounds", "none (no vertices)".into()),
+    }
+    row("watertight", yes_no(r.watertight));
+    row("manifold", yes_no(r.manifold));
+    for p in r.problems() {
+        let _ = writeln!(s, "  problem: {p}");
+    }
+    s
+}
+
+fn yes_no(b: bool) -> String {
+    if b { "yes" } else { "no" }.to_string()
 }

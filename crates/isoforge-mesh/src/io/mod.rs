@@ -87,6 +87,12 @@ impl MeshFormat {
     }
 }
 
+impl std::fmt::Display for MeshFormat {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// A mesh file could not be read or written.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshIoError {
@@ -193,7 +199,16 @@ pub fn write_mesh(mesh: &Mesh, path: &Path, format: MeshFormat) -> Result<(), Me
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(io_error)?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".isoforge-").suffix(".tmp");
+    // tempfile creates files private (0600); an output mesh should get the usual mode
+    // (0666 less the umask, which open(2) applies), as if written directly.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(dir).map_err(io_error)?;
     {
         let mut w = std::io::BufWriter::with_capacity(1 << 20, tmp.as_file_mut());
         encode(mesh, format, &mut w).map_err(io_error)?;
@@ -203,11 +218,17 @@ pub fn write_mesh(mesh: &Mesh, path: &Path, format: MeshFormat) -> Result<(), Me
     Ok(())
 }
 
-/// Writes a value for text formats: shortest text that reads back to the same f32, with
-/// `-0.0` written as `0` so readers that weld by bit pattern see one vertex.
-pub(crate) fn fmt_coord(v: f32) -> String {
-    let v = v + 0.0;
-    format!("{v}")
+/// A coordinate for text formats: shortest text that reads back to the same f32, with
+/// `-0.0` written as `0` so readers that weld by bit pattern see one vertex. A `Display`
+/// value, not a `String`, so writers format straight into their buffer.
+pub(crate) fn fmt_coord(v: f32) -> impl std::fmt::Display {
+    struct Coord(f32);
+    impl std::fmt::Display for Coord {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            std::fmt::Display::fmt(&(self.0 + 0.0), f)
+        }
+    }
+    Coord(v)
 }
 
 /// Parses one coordinate token of a text format: finite f32 or an error.

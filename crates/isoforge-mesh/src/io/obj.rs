@@ -92,6 +92,7 @@ fn resolve(token: &str, defined: usize, line: usize) -> Result<u32, ParseError> 
 
 /// Writes an OBJ file (1-based indices).
 pub fn write(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
+    let mut w = std::io::BufWriter::with_capacity(1 << 16, w);
     writeln!(w, "# isoforge")?;
     writeln!(
         w,
@@ -111,5 +112,5 @@ pub fn write(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
     for t in &mesh.triangles {
         writeln!(w, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
     }
-    Ok(())
+    w.flush()
 }

@@ -135,8 +135,14 @@ pub fn read_ascii(bytes: &[u8]) -> Result<Mesh, ParseError> {
     let mut facet_state = 0u8;
     while let Some((line, tok)) = toks.next() {
         last_line = line;
-        let kw = tok.to_ascii_lowercase();
-        match (kw.as_str(), in_solid, facet_state) {
+        // Keywords are matched without case and without allocating (20+ tokens a facet).
+        let kw = [
+            "solid", "endsolid", "facet", "outer", "vertex", "endloop", "endfacet",
+        ]
+        .into_iter()
+        .find(|k| k.eq_ignore_ascii_case(tok))
+        .unwrap_or("");
+        match (kw, in_solid, facet_state) {
             ("solid", false, _) => {
                 in_solid = true;
                 solids += 1;
@@ -236,6 +242,8 @@ pub fn write_binary(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
 
 /// Writes ASCII STL; coordinates are written so they read back to the same f32.
 pub fn write_ascii(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
+    // Dozens of small writes a facet: buffer them here, whatever `w` is.
+    let mut w = std::io::BufWriter::with_capacity(1 << 16, w);
     writeln!(w, "solid isoforge")?;
     for &t in &mesh.triangles {
         let n = mesh.triangle_normal(t);
@@ -260,5 +268,6 @@ pub fn write_ascii(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
         writeln!(w, "    endloop")?;
         writeln!(w, "  endfacet")?;
     }
-    writeln!(w, "endsolid isoforge")
+    writeln!(w, "endsolid isoforge")?;
+    w.flush()
 }

@@ -21,6 +21,10 @@ const MAX_COMPONENT_DEPTH: usize = 32;
 /// refer twice to parts... grow exponentially, so a small file could otherwise take hours.
 const MAX_INSTANCES: usize = 1_000_000;
 
+/// Deflate level for written packages. Model XML is repetitive; see `benches/meshio.rs`
+/// write_1m/3mf for the time this choice costs.
+const DEFLATE_LEVEL: i64 = 1;
+
 /// A row-vector affine transform as 3MF writes it: `p' = p * M`, 12 numbers
 /// `m00 m01 m02 m10 m11 m12 m20 m21 m22 m30 m31 m32`.
 type Affine = [f64; 12];
@@ -107,10 +111,13 @@ fn line_of(text: &str, offset: usize) -> usize {
 /// Parses the model XML into one mesh.
 fn parse_model(text: &str) -> Result<Mesh, ParseError> {
     let err = |off: usize, what: String| ParseError(format!("line {}: {what}", line_of(text, off)));
-    let mut objects: HashMap<String, Object> = HashMap::new();
+    // Objects in file order, found by id through `ids`; the current one by index, so the
+    // millions of vertex tags cost no hashing.
+    let mut objects: Vec<Object> = Vec::new();
+    let mut ids: HashMap<String, usize> = HashMap::new();
     let mut order: Vec<String> = Vec::new();
     let mut items: Vec<(String, Affine)> = Vec::new();
-    let mut current: Option<String> = None;
+    let mut current: Option<usize> = None;
     let mut scale = 1.0f64;
     for tag in Tags::new(text) {
         let tag = tag.map_err(|(off, what)| err(off, what))?;
@@ -131,12 +138,13 @@ fn parse_model(text: &str) -> Result<Mesh, ParseError> {
                     .attr("id")
                     .ok_or_else(|| err(tag.offset, "an object without an id".into()))?
                     .to_string();
-                if objects.contains_key(&id) {
+                if ids.contains_key(&id) {
                     return Err(err(tag.offset, format!("object id {id:?} is used twice")));
                 }
-                objects.insert(id.clone(), Object::default());
-                order.push(id.clone());
-                current = (tag.kind == TagKind::Open).then_some(id);
+                ids.insert(id.clone(), objects.len());
+                objects.push(Object::default());
+                order.push(id);
+                current = (tag.kind == TagKind::Open).then_some(objects.len() - 1);
             }
             ("object", TagKind::Close) => current = None,
             ("vertex", _) => {
@@ -205,7 +213,7 @@ fn parse_model(text: &str) -> Result<Mesh, ParseError> {
     if items.is_empty() {
         // No build: take every object that is not a part of another as placed.
         let used: std::collections::HashSet<&str> = objects
-            .values()
+            .iter()
             .flat_map(|o| o.components.iter().map(|(id, _)| id.as_str()))
             .collect();
         items = order
@@ -220,20 +228,26 @@ fn parse_model(text: &str) -> Result<Mesh, ParseError> {
     ];
     let mut budget = MAX_INSTANCES;
     for (id, m) in &items {
-        instantiate(&objects, id, &compose(m, &unit), 0, &mut budget, &mut out)?;
+        instantiate(
+            (&objects, &ids),
+            id,
+            &compose(m, &unit),
+            0,
+            &mut budget,
+            &mut out,
+        )?;
     }
     Ok(out)
 }
 
 fn current_object<'a>(
-    objects: &'a mut HashMap<String, Object>,
-    current: &Option<String>,
+    objects: &'a mut [Object],
+    current: &Option<usize>,
     tag: &Tag<'_>,
     err: &impl Fn(usize, String) -> ParseError,
 ) -> Result<&'a mut Object, ParseError> {
     current
-        .as_ref()
-        .and_then(|id| objects.get_mut(id))
+        .and_then(|i| objects.get_mut(i))
         .ok_or_else(|| err(tag.offset, format!("<{}> outside an <object>", tag.name)))
 }
 
@@ -251,7 +265,7 @@ fn transform(tag: &Tag<'_>) -> Result<Affine, String> {
 }
 
 fn instantiate(
-    objects: &HashMap<String, Object>,
+    objects: (&[Object], &HashMap<String, usize>),
     id: &str,
     m: &Affine,
     depth: usize,
@@ -269,11 +283,15 @@ fn instantiate(
             "components nest deeper than {MAX_COMPONENT_DEPTH} levels at object {id:?} (a cycle?)"
         )));
     }
-    let obj = objects.get(id).ok_or_else(|| {
-        ParseError(format!(
-            "a reference to object {id:?}, which does not exist"
-        ))
-    })?;
+    let obj = objects
+        .1
+        .get(id)
+        .and_then(|&i| objects.0.get(i))
+        .ok_or_else(|| {
+            ParseError(format!(
+                "a reference to object {id:?}, which does not exist"
+            ))
+        })?;
     let base = u32::try_from(out.vertices.len())
         .map_err(|_| ParseError("more than 2^32 vertices".into()))?;
     let mut placed = Vec::with_capacity(obj.mesh.vertices.len());
@@ -381,11 +399,13 @@ impl<'a> Iterator for Tags<'a> {
             // Find the closing '>' outside quoted attribute values.
             let mut quote = None;
             let mut close = None;
-            for (i, c) in rest.char_indices().skip(1) {
+            // Bytes, not chars: the delimiters are ASCII, so any index found is a char
+            // boundary.
+            for (i, &c) in rest.as_bytes().iter().enumerate().skip(1) {
                 match (quote, c) {
-                    (None, '"' | '\'') => quote = Some(c),
+                    (None, b'"' | b'\'') => quote = Some(c),
                     (Some(q), c) if c == q => quote = None,
-                    (None, '>') => {
+                    (None, b'>') => {
                         close = Some(i);
                         break;
                     }
@@ -433,10 +453,12 @@ const RELS: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
 /// Writes a minimal valid 3MF package: content types, the root relationship, and one
 /// object in millimetres placed by one build item.
 pub fn write(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
+    use std::fmt::Write as _;
     let to_io = |e: zip::result::ZipError| std::io::Error::other(e.to_string());
     let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
     let deflate = zip::write::SimpleFileOptions::default()
-        .compression_method(zip::CompressionMethod::Deflated);
+        .compression_method(zip::CompressionMethod::Deflated)
+        .compression_level(Some(DEFLATE_LEVEL));
     zip.start_file("[Content_Types].xml", deflate)
         .map_err(to_io)?;
     zip.write_all(CONTENT_TYPES.as_bytes())?;
@@ -450,12 +472,13 @@ pub fn write(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
          <resources>\n<object id=\"1\" type=\"model\">\n<mesh>\n<vertices>\n",
     );
     for p in &mesh.vertices {
-        buf.push_str(&format!(
-            "<vertex x=\"{}\" y=\"{}\" z=\"{}\"/>\n",
+        let _ = writeln!(
+            buf,
+            "<vertex x=\"{}\" y=\"{}\" z=\"{}\"/>",
             fmt_coord(p[0]),
             fmt_coord(p[1]),
             fmt_coord(p[2])
-        ));
+        );
         if buf.len() > 1 << 16 {
             zip.write_all(buf.as_bytes())?;
             buf.clear();
@@ -463,10 +486,11 @@ pub fn write(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
     }
     buf.push_str("</vertices>\n<triangles>\n");
     for t in &mesh.triangles {
-        buf.push_str(&format!(
-            "<triangle v1=\"{}\" v2=\"{}\" v3=\"{}\"/>\n",
+        let _ = writeln!(
+            buf,
+            "<triangle v1=\"{}\" v2=\"{}\" v3=\"{}\"/>",
             t[0], t[1], t[2]
-        ));
+        );
         if buf.len() > 1 << 16 {
             zip.write_all(buf.as_bytes())?;
             buf.clear();

@@ -1,0 +1,101 @@
+//! `isoforge check` end to end on the mesh fixtures: exit codes, the JSON figures, and
+//! messages that name the file.
+
+use isoforge_tests::{fixtures, isoforge};
+
+fn mesh(name: &str) -> String {
+    fixtures().join("meshes").join(name).display().to_string()
+}
+
+fn json_of(name: &str) -> (Option<i32>, serde_json::Value) {
+    let out = isoforge(&["check", &mesh(name), "--json"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    let value = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{name}: {e}: {text:?}"));
+    (out.status.code(), value)
+}
+
+#[test]
+fn closed_meshes_in_every_format_pass() {
+    for (name, volume) in [
+        ("cube_ascii.stl", 1000.0),
+        ("cube_binary.stl", 1000.0),
+        ("cube.3mf", 1000.0),
+        ("cube_quads.obj", 1000.0),
+        ("tetrahedron.ply", 1.0 / 6.0),
+        ("two_cubes.stl", 1125.0),
+    ] {
+        let (code, j) = json_of(name);
+        assert_eq!(code, Some(0), "{name}: {j}");
+        assert_eq!(j["watertight"], true, "{name}");
+        assert_eq!(j["manifold"], true, "{name}");
+        let v = j["volume"].as_f64().unwrap();
+        assert!((v - volume).abs() < 1e-6, "{name}: volume {v}");
+    }
+    let (_, j) = json_of("cube_binary.stl");
+    assert_eq!(j["triangles"], 12);
+    assert_eq!(j["vertices"], 8);
+    assert_eq!(j["area"], 600.0);
+    assert_eq!(
+        j["bounds"],
+        serde_json::json!([[0.0, 0.0, 0.0], [10.0, 10.0, 10.0]])
+    );
+    assert_eq!(json_of("two_cubes.stl").1["components"], 2);
+    let (code, j) = json_of("sphere.ply");
+    assert_eq!(code, Some(0));
+    assert_eq!(j["triangles"], 2 * 16 * 7);
+}
+
+#[test]
+fn broken_meshes_exit_1_and_say_why() {
+    let (code, j) = json_of("open_box.stl");
+    assert_eq!(code, Some(1));
+    assert_eq!(j["boundary_edges"], 4);
+    assert_eq!(j["watertight"], false);
+
+    let (code, j) = json_of("nonmanifold_pair.stl");
+    assert_eq!(code, Some(1));
+    assert_eq!(j["non_manifold_edges"], 1);
+    assert_eq!(j["manifold"], false);
+
+    let (code, j) = json_of("flipped_face.stl");
+    assert_eq!(code, Some(1));
+    assert_eq!(j["inconsistent_edges"], 3);
+
+    let out = isoforge(&["check", &mesh("open_box.stl")]);
+    assert_eq!(out.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("NOT closed"), "{text}");
+    assert!(text.contains("4 boundary edges"), "{text}");
+}
+
+#[test]
+fn unreadable_files_exit_2_naming_the_file() {
+    let out = isoforge(&["check", &mesh("truncated.stl")]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("truncated.stl: byte 384: truncated"), "{err}");
+    assert!(out.stdout.is_empty());
+
+    let out = isoforge(&["check", "/no/such/file.stl"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/no/such/file.stl"));
+
+    let dir = tempfile::tempdir().unwrap();
+    let junk = dir.path().join("junk.obj");
+    std::fs::write(&junk, "v 0 0 0\nv 1 0 0\nf 1 2 3\n").unwrap();
+    let out = isoforge(&["check", &junk.display().to_string(), "--json"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("junk.obj: line 3"), "{err}");
+    assert!(
+        out.stdout.is_empty(),
+        "--json prints nothing on stdout for an unreadable file"
+    );
+}
+
+#[test]
+fn quiet_prints_nothing_but_keeps_the_verdict() {
+    let out = isoforge(&["check", "--quiet", &mesh("open_box.stl")]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(out.stdout.is_empty() && out.stderr.is_empty());
+}
