@@ -39,6 +39,12 @@ impl Qef {
         self.planes.push((p, n));
     }
 
+    /// The mean of the crossings.
+    pub fn mass_point(&self) -> [f64; 3] {
+        let n = self.count.max(1) as f64;
+        self.sum_p.map(|s| s / n)
+    }
+
     /// The minimizer, or the mass point when nothing better is defined.
     pub fn solve(&self) -> [f64; 3] {
         if self.count == 0 {
