@@ -85,6 +85,14 @@ pub fn assert_closed_manifold(mesh: &Mesh, what: &str) -> f64 {
             "{what}: edge {a}-{b} has no opposite"
         );
     }
+    // STL has no shared vertices: readers weld by position, so positions must be distinct.
+    let mut seen = std::collections::HashSet::new();
+    for v in &mesh.vertices {
+        assert!(
+            seen.insert(v.map(f32::to_bits)),
+            "{what}: two vertices at {v:?}"
+        );
+    }
     // Vertex links: the "next" map around each vertex must be a single cycle.
     let mut around: HashMap<u32, HashMap<u32, u32>> = HashMap::new();
     for t in &mesh.triangles {
