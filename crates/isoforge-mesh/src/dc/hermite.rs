@@ -49,6 +49,7 @@ pub fn corner_index(s: usize, i: usize, j: usize, k: usize) -> usize {
 }
 
 /// Samples F at every corner of a block and packs "inside" bits.
+#[allow(clippy::too_many_arguments)]
 pub fn own_signs<S: Sampler>(
     sampler: &S,
     ev: &mut S::Evals,

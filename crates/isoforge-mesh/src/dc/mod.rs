@@ -161,7 +161,7 @@ impl<'a> Reporter<'a> {
         let Some(p) = self.progress else { return };
         let n = self.done.fetch_add(1, Ordering::Relaxed) + 1;
         let step = (self.total / 100).max(1);
-        if n % step == 0 || n == self.total {
+        if n.is_multiple_of(step) || n == self.total {
             p(self.from + (self.to - self.from) * n as f64 / self.total as f64);
         }
     }
@@ -269,7 +269,7 @@ pub(crate) fn mesh_sampler<S: Sampler>(sampler: &S, settings: &MeshSettings) -> 
 
     // Pass 3: polygons.
     let report = Reporter::new(progress, blocks.len(), 0.85, 0.98);
-    let emitted: Vec<(Vec<[u32; 3]>, Vec<[f32; 3]>)> = (0..outs.len())
+    let emitted: Vec<Emitted> = (0..outs.len())
         .into_par_iter()
         .map(|me| {
             let (mut tris, mut centres) = (Vec::new(), Vec::new());
@@ -316,6 +316,9 @@ pub(crate) fn mesh_sampler<S: Sampler>(sampler: &S, settings: &MeshSettings) -> 
     }
     mesh
 }
+
+/// A block's triangles and polygon centres.
+type Emitted = (Vec<[u32; 3]>, Vec<[f32; 3]>);
 
 #[derive(Default)]
 struct Pass2Scratch {

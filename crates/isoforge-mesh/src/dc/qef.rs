@@ -88,6 +88,7 @@ impl Qef {
 /// Eigenvalues and eigenvectors (columns) of a symmetric 3×3 matrix, by cyclic Jacobi
 /// rotations: robust for the rank-deficient matrices QEFs give, and 3×3 converges in a
 /// handful of sweeps.
+#[allow(clippy::needless_range_loop)] // index form mirrors the matrix algebra
 pub fn eigen_sym(mut a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for _sweep in 0..24 {
