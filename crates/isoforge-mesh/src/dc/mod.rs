@@ -169,8 +169,19 @@ impl<'a> Reporter<'a> {
 
 /// The mesher proper, on any sampler.
 pub(crate) fn mesh_sampler<S: Sampler>(sampler: &S, settings: &MeshSettings) -> Mesh {
+    mesh_sampler_blocks(sampler, settings, octree::BLOCK_SHIFT)
+}
+
+/// The mesher with a chosen block size (tests use small blocks to put block boundaries
+/// inside small lattices).
+pub(crate) fn mesh_sampler_blocks<S: Sampler>(
+    sampler: &S,
+    settings: &MeshSettings,
+    block_shift: u32,
+) -> Mesh {
     let progress = settings.progress.as_ref();
-    let grid = Grid::new(&settings.bounds, u32::from(settings.depth.min(MAX_DEPTH)));
+    let depth = u32::from(settings.depth.min(MAX_DEPTH));
+    let grid = Grid::new(&settings.bounds, depth, block_shift);
     let clip = Clip {
         bounds: settings.bounds,
     };

@@ -17,7 +17,7 @@ use super::sampler::{Clip, EvalPool, Sampler};
 /// Blocks are 2^BLOCK_SHIFT cells a side. 8³-cell blocks (729 corners) keep the dense
 /// waste low (a surface crosses ~1/8 of a block's cells) while an interval evaluation plus
 /// tape simplification costs about as much as sampling a whole block in batch.
-pub const BLOCK_SHIFT: u32 = 3;
+pub const BLOCK_SHIFT: u32 = 4;
 
 /// The lattice: cubes of side `cell` from `origin`, `2^depth` along each axis.
 #[derive(Clone, Copy, Debug)]
@@ -35,9 +35,10 @@ pub struct Grid {
 }
 
 impl Grid {
-    /// The lattice over a region: the longest side is split in 2^depth cells.
-    pub fn new(bounds: &Bounds, depth: u32) -> Grid {
-        let shift = BLOCK_SHIFT.min(depth);
+    /// The lattice over a region: the longest side is split in 2^depth cells, blocks of
+    /// 2^block_shift cells a side (fewer when the lattice is smaller).
+    pub fn new(bounds: &Bounds, depth: u32, block_shift: u32) -> Grid {
+        let shift = block_shift.min(depth);
         Grid {
             origin: bounds.min,
             cell: bounds.longest_side() / f64::from(1u32 << depth),

@@ -8,7 +8,7 @@ use isoforge_field::Bounds;
 use isoforge_field::Interval;
 
 use super::sampler::Sampler;
-use super::{MeshSettings, mesh_sampler};
+use super::{MeshSettings, mesh_sampler, mesh_sampler_blocks};
 use crate::mesh::Mesh;
 
 type IntervalFn = Box<dyn Fn([Interval; 3]) -> Interval + Sync>;
@@ -172,7 +172,8 @@ fn mesh_lattice(corners: &[([usize; 3], f64)], nan_grad: bool) -> Mesh {
     }
     let mut s = FnSampler::new(move |p| trilinear(&values, p));
     s.nan_grad = nan_grad;
-    mesh_sampler(&s, &settings(0.0, 16.0, 4))
+    // Blocks of 8 cells, so that the cells at 7..9 straddle block boundaries.
+    mesh_sampler_blocks(&s, &settings(0.0, 16.0, 4), 3)
 }
 
 fn corner_value(inside: bool, c: usize) -> f64 {
