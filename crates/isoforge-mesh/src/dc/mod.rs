@@ -2,7 +2,7 @@
 //! oriented triangle mesh.
 //!
 //! Stages, each in its own file:
-//! 1. `octree.rs`: interval pruning from the root cube down to 8³-cell blocks, the tape
+//! 1. `octree.rs`: interval pruning from the root cube down to 16³-cell blocks, the tape
 //!    simplified on the way (rayon over subtrees);
 //! 2. `hermite.rs`: every kept block sampled densely in one batch call; corner signs agreed
 //!    across block faces; crossings on sign-changing edges by batched bisection; normals
