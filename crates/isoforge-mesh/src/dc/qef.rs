@@ -94,11 +94,15 @@ pub fn eigen_sym(mut a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
     for _sweep in 0..24 {
         let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
         let diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
-        if off <= 1e-30 * diag.max(1e-300) {
+        // Off-diagonal mass below 1e-20 of the diagonal's (elements ~1e-10 relative) is
+        // far finer than the 1e-2 eigenvalue cut-off needs; a tighter bound only added
+        // sweeps (the solver was 13% of gyroid meshing time at 1e-30).
+        let tiny = 1e-20 * diag.max(1e-300);
+        if off <= tiny {
             break;
         }
         for (p, q) in [(0, 1), (0, 2), (1, 2)] {
-            if a[p][q].abs() < 1e-300 {
+            if a[p][q] * a[p][q] <= tiny * 1e-2 {
                 continue;
             }
             let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
