@@ -21,7 +21,7 @@ pub mod render;
 pub mod samples;
 
 pub use check::{MeshReport, check};
-pub use dc::{MeshSettings, mesh_shape};
+pub use dc::{MeshError, MeshSettings, mesh_shape, try_mesh_shape};
 pub use io::{MeshFormat, MeshIoError, read_mesh, write_mesh};
 pub use mesh::Mesh;
 pub use render::{Image, RenderSettings, View, render};

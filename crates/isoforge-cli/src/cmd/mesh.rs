@@ -123,7 +123,8 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
     bar.finish_and_clear();
     if mesh.triangles.is_empty() {
         bail!(
-            "{}: nothing is inside the region {:?} to {:?} (the field is not negative anywhere there)",
+            "{}: nothing is inside the region {:?} to {:?} at depth {depth} (the field is not \
+             negative at any lattice corner; parts thinner than a cell need a finer --depth)",
             args.model.model.display(),
             bounds.min,
             bounds.max

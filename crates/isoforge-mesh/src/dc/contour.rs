@@ -127,11 +127,7 @@ pub fn cell_vertices(
                 }
                 let lo = grid.corner([base[0] + i as i64, base[1] + j as i64, base[2] + k as i64]);
                 let vert = out.vertices.len() as u32;
-                for q in qefs.iter().take(case.patches as usize) {
-                    let v = q.solve();
-                    let v = [0, 1, 2].map(|a| v[a].clamp(lo[a], lo[a] + grid.cell) as f32);
-                    out.vertices.push(v);
-                }
+                place_vertices(grid, lo, &qefs[..case.patches as usize], &mut out.vertices);
                 let mut face = [NO_VERT; 3];
                 for (axis, slot) in face.iter_mut().enumerate() {
                     if !case.lower_ambiguous[axis] {
@@ -173,6 +169,39 @@ pub fn cell_vertices(
                 pos: x.pos.map(|v| v as f32),
             });
         }
+    }
+}
+
+/// Vertices are kept this fraction of a cell inside their cell, so that no two cells'
+/// vertices share a position: readers of STL (which has no shared vertices) weld by
+/// position, and two of our vertices welded together would break manifoldness.
+const INSET: f64 = 1e-3;
+
+/// One vertex per patch: the QEF minimizer kept inside the cell. In a cell with several
+/// patches a minimizer outside the cell falls back to its patch's mass point, and so do
+/// all of them if two would coincide: distinct patches must stay distinct points.
+fn place_vertices(grid: &Grid, lo: [f64; 3], qefs: &[Qef], out: &mut Vec<[f32; 3]>) {
+    let inset = grid.cell * INSET;
+    let clamp = |v: [f64; 3]| {
+        [0, 1, 2].map(|a| v[a].clamp(lo[a] + inset, lo[a] + grid.cell - inset) as f32)
+    };
+    let inside =
+        |v: [f64; 3]| (0..3).all(|a| v[a] >= lo[a] + inset && v[a] <= lo[a] + grid.cell - inset);
+    let start = out.len();
+    for q in qefs {
+        let v = q.solve();
+        let v = if qefs.len() > 1 && !inside(v) {
+            q.mass_point()
+        } else {
+            v
+        };
+        out.push(clamp(v));
+    }
+    let placed = &out[start..];
+    let clash = (0..placed.len()).any(|i| (i + 1..placed.len()).any(|j| placed[i] == placed[j]));
+    if clash {
+        out.truncate(start);
+        out.extend(qefs.iter().map(|q| clamp(q.mass_point())));
     }
 }
 

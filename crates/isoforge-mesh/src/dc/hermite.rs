@@ -14,7 +14,7 @@ use super::sampler::{Clip, Sampler};
 
 /// Bisection rounds on each crossing. After 8 halvings the bracket is 1/256 of a cell;
 /// the final linear interpolation on the bracket makes smooth surfaces far finer.
-const BISECTION_ROUNDS: usize = 8;
+const BISECTION_ROUNDS: usize = 6;
 
 /// A crossing of the surface on a lattice edge.
 #[derive(Clone, Copy, Debug)]
@@ -49,6 +49,7 @@ pub fn corner_index(s: usize, i: usize, j: usize, k: usize) -> usize {
 }
 
 /// Samples F at every corner of a block and packs "inside" bits.
+#[allow(clippy::too_many_arguments)]
 pub fn own_signs<S: Sampler>(
     sampler: &S,
     ev: &mut S::Evals,
@@ -262,6 +263,35 @@ pub fn crossings<S: Sampler>(
             }
         }
     }
+    // A bracket still touching an edge end has no value there: sample those ends (few:
+    // crossings within 1/2^rounds of a corner, such as caps on the region's faces), so
+    // the interpolation below applies to them too.
+    sc.xs.clear();
+    sc.ys.clear();
+    sc.zs.clear();
+    let mut ends = Vec::new();
+    for (e, edge) in edges.iter().enumerate() {
+        for (t, known) in [(0.0, sc.flo[e]), (1.0, sc.fhi[e])] {
+            if known.is_nan() {
+                let mut p = start(edge);
+                p[edge.axis as usize] += t * grid.cell;
+                sc.xs.push(p[0]);
+                sc.ys.push(p[1]);
+                sc.zs.push(p[2]);
+                ends.push((e, t == 0.0));
+            }
+        }
+    }
+    if !ends.is_empty() {
+        sc.out.clear();
+        sc.out.resize(ends.len(), 0.0);
+        sampler.batch(ev, local, &sc.xs, &sc.ys, &sc.zs, &mut sc.out);
+        for (k, &(e, at_lo)) in ends.iter().enumerate() {
+            let p = [sc.xs[k], sc.ys[k], sc.zs[k]];
+            let f = Clip::combine(sc.out[k], clip.dist(p));
+            if at_lo { sc.flo[e] = f } else { sc.fhi[e] = f }
+        }
+    }
     for (e, edge) in edges.iter().enumerate() {
         let (lo, hi, flo, fhi) = (sc.lo[e], sc.hi[e], sc.flo[e], sc.fhi[e]);
         // Interpolate on the final bracket when both ends were sampled with finite,
@@ -272,6 +302,9 @@ pub fn crossings<S: Sampler>(
         } else {
             0.5 * (lo + hi)
         };
+        // Never exactly on a corner: crossings of edges that share a corner must stay
+        // distinct points (they may become polygon centres).
+        let t = t.clamp(1e-3, 1.0 - 1e-3);
         let a = edge.axis as usize;
         let mut pos = start(edge);
         pos[a] += t * grid.cell;

@@ -2,7 +2,7 @@
 //! oriented triangle mesh.
 //!
 //! Stages, each in its own file:
-//! 1. `octree.rs`: interval pruning from the root cube down to 8³-cell blocks, the tape
+//! 1. `octree.rs`: interval pruning from the root cube down to 16³-cell blocks, the tape
 //!    simplified on the way (rayon over subtrees);
 //! 2. `hermite.rs`: every kept block sampled densely in one batch call; corner signs agreed
 //!    across block faces; crossings on sign-changing edges by batched bisection; normals
@@ -161,7 +161,7 @@ impl<'a> Reporter<'a> {
         let Some(p) = self.progress else { return };
         let n = self.done.fetch_add(1, Ordering::Relaxed) + 1;
         let step = (self.total / 100).max(1);
-        if n % step == 0 || n == self.total {
+        if n.is_multiple_of(step) || n == self.total {
             p(self.from + (self.to - self.from) * n as f64 / self.total as f64);
         }
     }
@@ -169,8 +169,19 @@ impl<'a> Reporter<'a> {
 
 /// The mesher proper, on any sampler.
 pub(crate) fn mesh_sampler<S: Sampler>(sampler: &S, settings: &MeshSettings) -> Mesh {
+    mesh_sampler_blocks(sampler, settings, octree::BLOCK_SHIFT)
+}
+
+/// The mesher with a chosen block size (tests use small blocks to put block boundaries
+/// inside small lattices).
+pub(crate) fn mesh_sampler_blocks<S: Sampler>(
+    sampler: &S,
+    settings: &MeshSettings,
+    block_shift: u32,
+) -> Mesh {
     let progress = settings.progress.as_ref();
-    let grid = Grid::new(&settings.bounds, u32::from(settings.depth.min(MAX_DEPTH)));
+    let depth = u32::from(settings.depth.min(MAX_DEPTH));
+    let grid = Grid::new(&settings.bounds, depth, block_shift);
     let clip = Clip {
         bounds: settings.bounds,
     };
@@ -269,7 +280,7 @@ pub(crate) fn mesh_sampler<S: Sampler>(sampler: &S, settings: &MeshSettings) -> 
 
     // Pass 3: polygons.
     let report = Reporter::new(progress, blocks.len(), 0.85, 0.98);
-    let emitted: Vec<(Vec<[u32; 3]>, Vec<[f32; 3]>)> = (0..outs.len())
+    let emitted: Vec<Emitted> = (0..outs.len())
         .into_par_iter()
         .map(|me| {
             let (mut tris, mut centres) = (Vec::new(), Vec::new());
@@ -316,6 +327,9 @@ pub(crate) fn mesh_sampler<S: Sampler>(sampler: &S, settings: &MeshSettings) -> 
     }
     mesh
 }
+
+/// A block's triangles and polygon centres.
+type Emitted = (Vec<[u32; 3]>, Vec<[f32; 3]>);
 
 #[derive(Default)]
 struct Pass2Scratch {

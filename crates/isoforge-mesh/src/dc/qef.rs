@@ -39,6 +39,12 @@ impl Qef {
         self.planes.push((p, n));
     }
 
+    /// The mean of the crossings.
+    pub fn mass_point(&self) -> [f64; 3] {
+        let n = self.count.max(1) as f64;
+        self.sum_p.map(|s| s / n)
+    }
+
     /// The minimizer, or the mass point when nothing better is defined.
     pub fn solve(&self) -> [f64; 3] {
         if self.count == 0 {
@@ -82,16 +88,21 @@ impl Qef {
 /// Eigenvalues and eigenvectors (columns) of a symmetric 3×3 matrix, by cyclic Jacobi
 /// rotations: robust for the rank-deficient matrices QEFs give, and 3×3 converges in a
 /// handful of sweeps.
+#[allow(clippy::needless_range_loop)] // index form mirrors the matrix algebra
 pub fn eigen_sym(mut a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for _sweep in 0..24 {
         let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
         let diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
-        if off <= 1e-30 * diag.max(1e-300) {
+        // Off-diagonal mass below 1e-20 of the diagonal's (elements ~1e-10 relative) is
+        // far finer than the 1e-2 eigenvalue cut-off needs; a tighter bound only added
+        // sweeps (the solver was 13% of gyroid meshing time at 1e-30).
+        let tiny = 1e-20 * diag.max(1e-300);
+        if off <= tiny {
             break;
         }
         for (p, q) in [(0, 1), (0, 2), (1, 2)] {
-            if a[p][q].abs() < 1e-300 {
+            if a[p][q] * a[p][q] <= tiny * 1e-2 {
                 continue;
             }
             let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);

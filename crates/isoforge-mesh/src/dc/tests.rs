@@ -8,7 +8,7 @@ use isoforge_field::Bounds;
 use isoforge_field::Interval;
 
 use super::sampler::Sampler;
-use super::{MeshSettings, mesh_sampler};
+use super::{MeshSettings, mesh_sampler, mesh_sampler_blocks};
 use crate::mesh::Mesh;
 
 type IntervalFn = Box<dyn Fn([Interval; 3]) -> Interval + Sync>;
@@ -83,6 +83,14 @@ pub fn assert_closed_manifold(mesh: &Mesh, what: &str) -> f64 {
             directed.get(&(b, a)).copied(),
             Some(1),
             "{what}: edge {a}-{b} has no opposite"
+        );
+    }
+    // STL has no shared vertices: readers weld by position, so positions must be distinct.
+    let mut seen = std::collections::HashSet::new();
+    for v in &mesh.vertices {
+        assert!(
+            seen.insert(v.map(f32::to_bits)),
+            "{what}: two vertices at {v:?}"
         );
     }
     // Vertex links: the "next" map around each vertex must be a single cycle.
@@ -164,7 +172,8 @@ fn mesh_lattice(corners: &[([usize; 3], f64)], nan_grad: bool) -> Mesh {
     }
     let mut s = FnSampler::new(move |p| trilinear(&values, p));
     s.nan_grad = nan_grad;
-    mesh_sampler(&s, &settings(0.0, 16.0, 4))
+    // Blocks of 8 cells, so that the cells at 7..9 straddle block boundaries.
+    mesh_sampler_blocks(&s, &settings(0.0, 16.0, 4), 3)
 }
 
 fn corner_value(inside: bool, c: usize) -> f64 {

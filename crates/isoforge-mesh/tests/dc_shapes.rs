@@ -1,0 +1,228 @@
+//! The mesher on real field tapes: models built to break meshers, each checked closed,
+//! manifold and oriented by the crate's checker, with distinct vertex positions (so STL
+//! readers that weld by position agree), and volumes near the exact ones where known.
+
+use std::collections::HashSet;
+
+use isoforge_field::{Bounds, Shape};
+use isoforge_mesh::{Mesh, MeshSettings, check, mesh_shape};
+use proptest::prelude::*;
+
+fn xyz() -> (Shape, Shape, Shape) {
+    (Shape::x(), Shape::y(), Shape::z())
+}
+
+fn sphere_at(c: [f64; 3], r: f64) -> Shape {
+    let (x, y, z) = xyz();
+    (x - c[0]).square() + (y - c[1]).square() + (z - c[2]).square() - r * r
+}
+
+fn cube(lo: f64, hi: f64) -> Bounds {
+    Bounds::new([lo; 3], [hi; 3]).expect("valid box")
+}
+
+/// Meshes and checks; returns the mesh and its volume.
+fn mesh_ok(shape: &Shape, bounds: Bounds, depth: u8, what: &str) -> (Mesh, f64) {
+    let mesh = mesh_shape(shape, &MeshSettings::new(bounds, depth));
+    let report = check(&mesh);
+    assert!(
+        mesh.triangles.is_empty() || report.is_closed_manifold(),
+        "{what} depth {depth}: {:?}",
+        report.problems()
+    );
+    let mut seen = HashSet::new();
+    for v in &mesh.vertices {
+        assert!(v.iter().all(|c| c.is_finite()), "{what}: vertex {v:?}");
+        assert!(
+            seen.insert(v.map(f32::to_bits)),
+            "{what}: two vertices at {v:?}"
+        );
+        for a in 0..3 {
+            let (lo, hi) = (bounds.min[a] as f32, bounds.max[a] as f32);
+            assert!(
+                v[a] >= lo - 1e-4 && v[a] <= hi + 1e-4,
+                "{what}: {v:?} outside the region"
+            );
+        }
+    }
+    if !mesh.triangles.is_empty() {
+        assert!(report.volume > 0.0, "{what}: volume {}", report.volume);
+    }
+    (mesh, report.volume)
+}
+
+#[test]
+fn sphere_volume_converges() {
+    let exact = 4.0 / 3.0 * std::f64::consts::PI;
+    for (depth, tol) in [(4u8, 0.1), (5, 0.04), (6, 0.02), (7, 0.01)] {
+        let (_, vol) = mesh_ok(&sphere_at([0.0; 3], 1.0), cube(-1.5, 1.5), depth, "sphere");
+        assert!((vol - exact).abs() < tol * exact, "depth {depth}: {vol}");
+    }
+}
+
+#[test]
+fn cut_by_region_is_capped() {
+    // Sphere of radius 1 in the half box z ≥ 0: a hemisphere, 2/3 π.
+    let b = Bounds::new([-1.5, -1.5, 0.0], [1.5, 1.5, 1.5]).expect("box");
+    let (_, vol) = mesh_ok(&sphere_at([0.0; 3], 1.0), b, 6, "hemisphere");
+    let exact = 2.0 / 3.0 * std::f64::consts::PI;
+    assert!((vol - exact).abs() < 0.02 * exact, "{vol}");
+    // A field negative everywhere: the region itself.
+    let (_, vol) = mesh_ok(
+        &(Shape::x() * 0.0 - 1.0 + Shape::y() * 0.0),
+        cube(-1.0, 1.0),
+        4,
+        "all",
+    );
+    // Vertices sit 1/1000 of a cell inside their cells (see contour.rs).
+    assert!((vol - 8.0).abs() < 1e-2, "{vol}");
+}
+
+#[test]
+fn thin_plates_and_touching_spheres() {
+    let (x, _, z) = xyz();
+    mesh_ok(
+        &(z.abs() - 0.004),
+        cube(-1.0, 1.0),
+        5,
+        "plate thinner than a cell",
+    );
+    mesh_ok(
+        &((z + x * 0.37).abs() - 0.05),
+        cube(-1.0, 1.0),
+        5,
+        "tilted thin plate",
+    );
+    for shift in [0.0, 0.011] {
+        let s =
+            sphere_at([0.5 + shift, 0.0, 0.0], 0.5).min(&sphere_at([-0.5 + shift, 0.0, 0.0], 0.5));
+        mesh_ok(&s, cube(-1.0, 1.0), 5, "touching spheres");
+        mesh_ok(&s, cube(-1.0, 1.0), 6, "touching spheres");
+    }
+}
+
+#[test]
+fn nan_regions_and_singular_gradients() {
+    let (x, y, z) = xyz();
+    // NaN for x < 0: outside there.
+    let (_, vol) = mesh_ok(&(x.sqrt() - 0.5), cube(-1.0, 1.0), 5, "sqrt(x)");
+    assert!((vol - 1.0).abs() < 0.1, "{vol}");
+    // Cones through the z axis, where the gradient of sqrt(x²+y²) is undefined.
+    let r = (x.square() + y.square()).sqrt();
+    mesh_ok(
+        &(r.clone() - (1.0 - z.abs()) * 0.5),
+        cube(-1.0, 1.0),
+        6,
+        "double cone",
+    );
+    let (_, vol) = mesh_ok(&(r - 0.5), cube(-1.0, 1.0), 6, "cylinder");
+    let exact = std::f64::consts::PI * 0.25 * 2.0;
+    assert!((vol - exact).abs() < 0.02 * exact, "{vol}");
+    // ln of a negative number and division by zero.
+    let (x, y, z) = xyz();
+    mesh_ok(
+        &(x.ln() + y.square() + z.square()),
+        cube(-2.0, 2.0),
+        5,
+        "ln(x)",
+    );
+    mesh_ok(
+        &((x.square() + y.square() + z.square()).recip() * -1.0 + 2.0),
+        cube(-1.0, 1.0),
+        5,
+        "1/r²",
+    );
+}
+
+#[test]
+fn heart_with_vanishing_gradient() {
+    let (x, y, z) = xyz();
+    let a = x.square() + y.square() * 2.25 + z.square() - 1.0;
+    let heart = a.powi(3) - x.square() * z.powi(3) - y.square() * z.powi(3) * 0.1125;
+    let (_, vol) = mesh_ok(&heart, cube(-1.5, 1.5), 6, "heart");
+    assert!((vol - 3.327).abs() < 0.05, "{vol}");
+}
+
+#[test]
+fn deep_union_of_hundreds_of_spheres() {
+    let mut s = sphere_at([0.0; 3], 0.05);
+    for i in 1..300 {
+        let t = i as f64 * 0.1;
+        s = s.min(&sphere_at(
+            [t.sin() * 0.8, t.cos() * 0.8, (t * 0.37).sin() * 0.8],
+            0.07,
+        ));
+    }
+    mesh_ok(&s, cube(-1.0, 1.0), 6, "300 spheres");
+}
+
+#[test]
+fn gyroid_sphere_depths_5_to_7() {
+    let (x, y, z) = xyz();
+    let (x8, y8, z8) = (x.clone() * 8.0, y.clone() * 8.0, z.clone() * 8.0);
+    let g = x8.sin() * y8.cos() + y8.sin() * z8.cos() + z8.sin() * x8.cos();
+    let s = (g.abs() - 0.3).max(&(x.square() + y.square() + z.square() - 1.0));
+    for depth in 5..=7 {
+        let (_, vol) = mesh_ok(&s, cube(-1.5, 1.5), depth, "gyroid sphere");
+        if depth == 7 {
+            assert!((vol - 0.817).abs() < 0.02, "{vol}");
+        }
+    }
+}
+
+#[test]
+fn threads_and_progress_are_honoured() {
+    use std::sync::{Arc, Mutex};
+    let seen = Arc::new(Mutex::new(Vec::new()));
+    let mut settings = MeshSettings::new(cube(-1.5, 1.5), 5);
+    settings.threads = 1;
+    let log = seen.clone();
+    settings.progress = Some(Arc::new(move |f| {
+        if let Ok(mut v) = log.lock() {
+            v.push(f);
+        }
+    }));
+    let one = mesh_shape(&sphere_at([0.0; 3], 1.0), &settings);
+    let seen = seen.lock().expect("lock").clone();
+    assert!(seen.len() > 3);
+    assert!(seen.iter().all(|f| (0.0..=1.0).contains(f)));
+    assert_eq!(seen.last().copied(), Some(1.0));
+    // The same mesh on all cores: output does not depend on scheduling.
+    let all = mesh_shape(
+        &sphere_at([0.0; 3], 1.0),
+        &MeshSettings::new(cube(-1.5, 1.5), 5),
+    );
+    assert_eq!(one, all);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+    /// Random unions, intersections and differences of spheres and half-spaces.
+    #[test]
+    fn random_csg_is_closed_manifold(
+        parts in prop::collection::vec(
+            (prop::array::uniform3(-0.8f64..0.8), 0.05f64..0.7, 0u8..4, prop::array::uniform3(-1.0f64..1.0)),
+            1..8,
+        ),
+        depth in 3u8..6,
+    ) {
+        let (x, y, z) = xyz();
+        let mut s: Option<Shape> = None;
+        for (c, r, op, n) in parts {
+            let part = if op == 3 {
+                x.clone() * n[0] + y.clone() * n[1] + z.clone() * n[2] - r
+            } else {
+                sphere_at(c, r)
+            };
+            s = Some(match (s, op) {
+                (None, _) => part,
+                (Some(a), 0) | (Some(a), 3) => a.min(&part),
+                (Some(a), 1) => a.max(&part),
+                (Some(a), _) => a.max(&(part * -1.0)),
+            });
+        }
+        if let Some(s) = s {
+            mesh_ok(&s, cube(-1.0, 1.0), depth, "random csg");
+        }
+    }
+}

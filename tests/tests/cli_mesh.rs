@@ -1,0 +1,191 @@
+//! End-to-end tests of `isoforge mesh`: every fixture meshes into a closed manifold file that
+//! reads back and passes the checker; formats, defaults, usage errors and failed work.
+
+use std::path::{Path, PathBuf};
+
+use isoforge_mesh::{check, read_mesh};
+use isoforge_tests::{fixtures, isoforge};
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+/// Meshes a model to `out` with extra arguments, expects success, checks the file and the
+/// JSON figures; returns the JSON.
+fn mesh_ok(model: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["mesh", s(model), "-o", s(out), "--json"];
+    args.extend_from_slice(extra);
+    let run = isoforge(&args);
+    assert!(
+        run.status.success(),
+        "{}: {}",
+        model.display(),
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&run.stdout).expect("--json prints one JSON object");
+    assert_eq!(json["watertight"], true, "{}", model.display());
+    assert_eq!(json["manifold"], true, "{}", model.display());
+    assert!(json["volume"].as_f64().unwrap_or(-1.0) > 0.0);
+    assert!(json["seconds"].as_f64().is_some());
+    assert!(json["bounds"].is_array());
+    let mesh = read_mesh(out).expect("the output reads back");
+    let report = check(&mesh);
+    assert!(
+        report.is_closed_manifold(),
+        "{}: {:?}",
+        out.display(),
+        report.problems()
+    );
+    assert_eq!(
+        json["triangles"].as_u64(),
+        Some(mesh.triangles.len() as u64)
+    );
+    json
+}
+
+fn models(dir: &str) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(fixtures().join(dir))
+        .expect("fixtures folder")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "rhai"))
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn every_classic_and_bench_fixture_meshes_closed() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for model in models("classic").into_iter().chain(models("bench")) {
+        let out = dir.path().join("out.stl");
+        mesh_ok(&model, &out, &["--depth", "5"]);
+    }
+}
+
+#[test]
+fn sphere_volume_and_resolution() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("sphere.stl");
+    let sphere = fixtures().join("bench/sphere.rhai");
+    let json = mesh_ok(&sphere, &out, &["--depth", "6"]);
+    let vol = json["volume"].as_f64().unwrap_or(0.0);
+    assert!((vol - 4.18879).abs() < 0.02 * 4.18879, "{vol}");
+    // --resolution 0.05 over a 3 mm region: depth 6 (3/64 = 0.047), the same mesh.
+    let json2 = mesh_ok(&sphere, &out, &["--resolution", "0.05", "--threads", "1"]);
+    assert_eq!(json["triangles"], json2["triangles"]);
+}
+
+#[test]
+fn formats_by_flag_and_by_extension() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let heart = fixtures().join("classic/heart.rhai");
+    for (name, flag) in [
+        ("a.obj", None),
+        ("b.ply", None),
+        ("c.3mf", None),
+        ("d.stl", Some("stl-ascii")),
+        ("e.mesh", Some("obj")),
+    ] {
+        let out = dir.path().join(name);
+        let mut extra = vec!["--depth", "4"];
+        if let Some(f) = flag {
+            extra.extend(["--format", f]);
+        }
+        mesh_ok(&heart, &out, &extra);
+        if flag == Some("stl-ascii") {
+            let text = std::fs::read(&out).expect("file");
+            assert!(text.starts_with(b"solid"), "ASCII STL");
+        }
+    }
+}
+
+#[test]
+fn default_output_is_beside_the_model() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = dir.path().join("ball.rhai");
+    std::fs::copy(fixtures().join("bench/sphere.rhai"), &model).expect("copy");
+    let run = isoforge(&["mesh", s(&model), "--depth", "4", "--quiet"]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(run.stdout.is_empty(), "--quiet prints nothing");
+    let mesh = read_mesh(&dir.path().join("ball.stl")).expect("ball.stl written");
+    assert!(check(&mesh).is_closed_manifold());
+}
+
+#[test]
+fn vm_model_with_bounds() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("colonnade.stl");
+    let model = fixtures().join("vm/colonnade.vm");
+    mesh_ok(&model, &out, &["--depth", "6", "--bounds=-1,-1,-1,1,1,1"]);
+}
+
+#[test]
+fn usage_errors_exit_2_and_write_nothing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("x.stl");
+    let sphere = fixtures().join("bench/sphere.rhai");
+    for extra in [
+        vec!["--depth", "40"],
+        vec!["--format", "dwg"],
+        vec!["--resolution", "-1"],
+        vec!["--resolution", "0"],
+        vec!["--resolution", "1e-12"],
+        vec!["--depth", "4", "--resolution", "0.1"],
+        vec!["--threads", "0"],
+        vec!["--depth", "many"],
+    ] {
+        let mut args = vec!["mesh", s(&sphere), "-o", s(&out)];
+        args.extend_from_slice(&extra);
+        let run = isoforge(&args);
+        assert_eq!(run.status.code(), Some(2), "{extra:?}");
+        assert!(!run.stderr.is_empty(), "{extra:?} says why");
+        assert!(!out.exists(), "{extra:?} wrote a file");
+    }
+}
+
+#[test]
+fn failed_work_exits_1_and_writes_nothing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("x.stl");
+    let bad = fixtures().join("bad");
+    let mut cases: Vec<PathBuf> = std::fs::read_dir(&bad)
+        .expect("bad fixtures")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "rhai"))
+        .collect();
+    cases.sort();
+    assert!(!cases.is_empty());
+    for model in cases {
+        let run = isoforge(&["mesh", s(&model), "-o", s(&out), "--depth", "4"]);
+        assert_eq!(run.status.code(), Some(1), "{}", model.display());
+        assert!(
+            !run.stderr.is_empty(),
+            "{} gave no message",
+            model.display()
+        );
+        assert!(!out.exists(), "{} left a file", model.display());
+    }
+    // A region with nothing in it.
+    let sphere = fixtures().join("bench/sphere.rhai");
+    let run = isoforge(&[
+        "mesh",
+        s(&sphere),
+        "-o",
+        s(&out),
+        "--bounds=5,5,5,6,6,6",
+        "--depth",
+        "4",
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("nothing is inside"));
+    assert!(!out.exists());
+    // A missing model file.
+    let run = isoforge(&["mesh", "no/such/model.rhai", "-o", s(&out)]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(!out.exists());
+}
