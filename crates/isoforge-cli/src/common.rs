@@ -98,11 +98,7 @@ pub fn parse_bounds(text: &str) -> Result<Bounds> {
 
 /// Writes a file whole or not at all: into a temporary file beside it, then renamed.
 pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir)
+    let mut tmp = isoforge_mesh::io::temp_file_beside(path)
         .with_context(|| format!("{}: cannot create a file there", path.display()))?;
     {
         let mut buf = std::io::BufWriter::new(tmp.as_file_mut());
@@ -132,5 +128,7 @@ pub fn progress_bar(global: &Global, len: u64, message: &str) -> indicatif::Prog
 
 /// Prints a JSON object on stdout.
 pub fn print_json(value: &serde_json::Value) {
-    println!("{value}");
+    // `println!` panics when stdout is a closed pipe (`| head`); a reader that went away
+    // is not an error of ours.
+    let _ = writeln!(std::io::stdout().lock(), "{value}");
 }

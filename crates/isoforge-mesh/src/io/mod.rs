@@ -195,20 +195,7 @@ pub fn write_mesh(mesh: &Mesh, path: &Path, format: MeshFormat) -> Result<(), Me
         path: path.display().to_string(),
         source,
     };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".isoforge-").suffix(".tmp");
-    // tempfile creates files private (0600); an output mesh should get the usual mode
-    // (0666 less the umask, which open(2) applies), as if written directly.
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        builder.permissions(std::fs::Permissions::from_mode(0o666));
-    }
-    let mut tmp = builder.tempfile_in(dir).map_err(io_error)?;
+    let mut tmp = temp_file_beside(path).map_err(io_error)?;
     {
         let mut w = std::io::BufWriter::with_capacity(1 << 20, tmp.as_file_mut());
         encode(mesh, format, &mut w).map_err(io_error)?;
@@ -216,6 +203,25 @@ pub fn write_mesh(mesh: &Mesh, path: &Path, format: MeshFormat) -> Result<(), Me
     }
     tmp.persist(path).map_err(|e| io_error(e.error))?;
     Ok(())
+}
+
+/// A temporary file in the same folder as `path`, to be renamed over it once written whole
+/// (a rename within a folder is atomic). Every output file isoforge writes goes this way.
+pub fn temp_file_beside(path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".isoforge-").suffix(".tmp");
+    // tempfile creates files private (0600); an output file should get the usual mode
+    // (0666 less the umask, which open(2) applies), as if written directly.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    builder.tempfile_in(dir)
 }
 
 /// A coordinate for text formats: shortest text that reads back to the same f32, with
