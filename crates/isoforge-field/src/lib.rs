@@ -32,7 +32,7 @@ pub use bounds::Bounds;
 pub use context::{Context, NodeId};
 pub use custom::CustomField;
 pub use eval::batch::BatchEval;
-pub use eval::grad::{GradEval, Grad};
+pub use eval::grad::{Grad, GradEval};
 pub use eval::interval::IntervalEval;
 pub use eval::point::PointEval;
 pub use inari::Interval;

@@ -37,6 +37,50 @@ pub enum ShapeNode {
     Custom(Arc<dyn CustomField>, [Shape; 3]),
 }
 
+impl ShapeNode {
+    /// Moves the children that this node alone owns into `out`, leaving cheap placeholders,
+    /// so they can be dropped from a loop instead of by recursion.
+    fn take_unique_children(&mut self, out: &mut Vec<Shape>) {
+        let mut take = |s: &mut Shape| {
+            // A shared child is only decremented when dropped: no recursion to avoid.
+            if Arc::strong_count(&s.0) == 1 {
+                out.push(std::mem::replace(s, placeholder()));
+            }
+        };
+        match self {
+            ShapeNode::Var(_) | ShapeNode::Const(_) => {}
+            ShapeNode::Unary(_, a) => take(a),
+            ShapeNode::Binary(_, a, b) => {
+                take(a);
+                take(b)
+            }
+            ShapeNode::Custom(_, ins) => ins.iter_mut().for_each(take),
+        }
+    }
+}
+
+/// A shared constant node put in place of children taken out for iterative dropping.
+fn placeholder() -> Shape {
+    static P: std::sync::LazyLock<Shape> =
+        std::sync::LazyLock::new(|| Shape(Arc::new(ShapeNode::Const(0.0))));
+    P.clone()
+}
+
+impl Drop for ShapeNode {
+    /// Drops a deep chain (a 100,000-long min chain, say) without one stack frame per
+    /// level: children owned only by this node are unlinked and dropped from a loop.
+    fn drop(&mut self) {
+        let mut stack = Vec::new();
+        self.take_unique_children(&mut stack);
+        while let Some(s) = stack.pop() {
+            if let Some(mut node) = Arc::into_inner(s.0) {
+                node.take_unique_children(&mut stack);
+                // `node` now has only placeholder or shared children: dropping it is flat.
+            }
+        }
+    }
+}
+
 /// A field f(x, y, z): negative inside, positive outside. Cheap to clone.
 #[derive(Clone)]
 pub struct Shape(pub(crate) Arc<ShapeNode>);

@@ -18,6 +18,7 @@ pub mod dc;
 pub mod io;
 pub mod mesh;
 pub mod render;
+pub mod samples;
 
 pub use check::{MeshReport, check};
 pub use dc::{MeshSettings, mesh_shape};

@@ -9,3 +9,133 @@ pub struct Mesh {
     /// Triangles as three indices into `vertices`.
     pub triangles: Vec<[u32; 3]>,
 }
+
+impl Mesh {
+    /// The axis-aligned box of all vertices as `[min, max]`, or `None` for a mesh without
+    /// vertices.
+    pub fn bounds(&self) -> Option<[[f32; 3]; 2]> {
+        let first = *self.vertices.first()?;
+        let mut lo = first;
+        let mut hi = first;
+        for v in &self.vertices {
+            for i in 0..3 {
+                lo[i] = lo[i].min(v[i]);
+                hi[i] = hi[i].max(v[i]);
+            }
+        }
+        Some([lo, hi])
+    }
+
+    /// The three corners of a triangle, in f64. Indices must be in range (see
+    /// [`Mesh::has_valid_indices`]).
+    pub fn corners(&self, t: [u32; 3]) -> [[f64; 3]; 3] {
+        t.map(|i| self.vertices[i as usize].map(f64::from))
+    }
+
+    /// True when every triangle index names a vertex.
+    pub fn has_valid_indices(&self) -> bool {
+        let n = self.vertices.len();
+        self.triangles
+            .iter()
+            .all(|t| t.iter().all(|&i| (i as usize) < n))
+    }
+
+    /// The signed volume enclosed, by the divergence theorem: the sum of the tetrahedra each
+    /// triangle spans with a reference point. Positive when the triangles face outward.
+    /// Summed in f64 around the bounding box's centre, so large offsets from the origin do
+    /// not cost precision.
+    pub fn signed_volume(&self) -> f64 {
+        let Some([lo, hi]) = self.bounds() else {
+            return 0.0;
+        };
+        let c: [f64; 3] = [0, 1, 2].map(|i| (f64::from(lo[i]) + f64::from(hi[i])) * 0.5);
+        let mut six_v = 0.0;
+        for &t in &self.triangles {
+            let [a, b, d] = self.corners(t).map(|p| sub(p, c));
+            six_v += dot(a, cross(b, d));
+        }
+        six_v / 6.0
+    }
+
+    /// The total surface area.
+    pub fn area(&self) -> f64 {
+        self.triangles
+            .iter()
+            .map(|&t| triangle_area(self.corners(t)))
+            .sum()
+    }
+
+    /// The unit normal of a triangle from its winding (zero for a degenerate triangle).
+    pub fn triangle_normal(&self, t: [u32; 3]) -> [f32; 3] {
+        let [a, b, c] = self.corners(t);
+        let n = cross(sub(b, a), sub(c, a));
+        let len = dot(n, n).sqrt();
+        if len > 0.0 && len.is_finite() {
+            n.map(|v| (v / len) as f32)
+        } else {
+            [0.0; 3]
+        }
+    }
+}
+
+/// The area of a triangle given by its corners.
+pub fn triangle_area(p: [[f64; 3]; 3]) -> f64 {
+    let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+    0.5 * dot(n, n).sqrt()
+}
+
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_tetrahedron() -> Mesh {
+        Mesh {
+            vertices: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        }
+    }
+
+    #[test]
+    fn tetrahedron_volume_area_bounds() {
+        let m = unit_tetrahedron();
+        assert!((m.signed_volume() - 1.0 / 6.0).abs() < 1e-12);
+        let want = 1.5 + 3f64.sqrt() / 2.0;
+        assert!((m.area() - want).abs() < 1e-9);
+        assert_eq!(m.bounds(), Some([[0.0; 3], [1.0; 3]]));
+        assert_eq!(m.triangle_normal([0, 2, 1]), [0.0, 0.0, -1.0]);
+    }
+
+    #[test]
+    fn flipped_tetrahedron_has_negative_volume() {
+        let mut m = unit_tetrahedron();
+        for t in &mut m.triangles {
+            t.swap(1, 2);
+        }
+        assert!((m.signed_volume() + 1.0 / 6.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn far_from_origin_volume_stays_exact() {
+        let mut m = unit_tetrahedron();
+        for v in &mut m.vertices {
+            v[0] += 1.0e6;
+        }
+        assert!((m.signed_volume() - 1.0 / 6.0).abs() < 1e-9);
+    }
+}

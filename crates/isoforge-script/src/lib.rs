@@ -1,9 +1,40 @@
 //! Model scripts for isoforge: a Rhai script builds a field graph once; the graph, not the
 //! script, is evaluated per point.
+//!
+//! ```no_run
+//! use std::path::Path;
+//! // script → field graph (+ declared bounds and parameters) → region
+//! let model = isoforge_script::load_file(Path::new("fixtures/classic/heart.rhai"), &[])?;
+//! let region = match model.bounds {
+//!     Some(b) => b,
+//!     None => isoforge_script::find_bounds(&model.shape)?,
+//! };
+//! # let _ = region;
+//! # Ok::<(), isoforge_script::ScriptError>(())
+//! ```
+//!
+//! The scripting language and library are specified in `SCRIPT_API.md`: `x y z`, mixed
+//! number/Shape arithmetic with `^` as power and real division, the classic library,
+//! `param(..)` and `bounds(..)`. Scripts run sandboxed: an operation limit, a call-depth
+//! limit, no `import` and no `eval`, and output to stderr only.
 
 use std::path::Path;
+use std::sync::{Arc, Mutex};
 
 use isoforge_field::{Bounds, Shape};
+use rhai::Dynamic;
+
+mod args;
+mod engine;
+mod errors;
+mod library;
+mod notation;
+mod ops;
+mod params;
+mod region;
+
+pub use engine::{MAX_CALL_LEVELS, MAX_OPERATIONS};
+pub use region::{SEARCH_HALF_SIDE, ensure_not_empty, region_is_empty};
 
 /// A declared parameter.
 #[derive(Clone, Debug, PartialEq)]
@@ -29,19 +60,181 @@ pub struct Model {
     pub params: Vec<Param>,
 }
 
-/// A script failed; the message names the file, line and column.
+/// A script failed; the message names the file, line and column ("path:line:col: what").
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
 pub struct ScriptError(pub String);
 
 /// Loads a model file (`.rhai` script, or a `.vm` expression file) with parameter overrides.
 pub fn load_file(path: &Path, params: &[(String, f64)]) -> Result<Model, ScriptError> {
-    let _ = (path, params);
-    todo!("script helper")
+    let bytes = std::fs::read(path)
+        .map_err(|e| ScriptError(format!("{}: cannot read: {e}", path.display())))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        ScriptError(format!(
+            "{}: not a text file (invalid UTF-8 at byte {})",
+            path.display(),
+            e.utf8_error().valid_up_to()
+        ))
+    })?;
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("vm"))
+    {
+        load_vm(path, &text, params)
+    } else {
+        load_script(path, &text, params)
+    }
+}
+
+/// Loads a `.vm` expression file (one operation per line; see `isoforge_field::vm`).
+pub fn load_vm(path: &Path, text: &str, params: &[(String, f64)]) -> Result<Model, ScriptError> {
+    if let Some((name, _)) = params.first() {
+        return Err(ScriptError(format!(
+            "{}: --param {name}: a .vm model has no parameters",
+            path.display()
+        )));
+    }
+    let shape = isoforge_field::vm::parse_vm(text)
+        .map_err(|e| ScriptError(format!("{}:{}: {}", path.display(), e.line, e.message)))?;
+    Ok(Model {
+        shape,
+        bounds: None,
+        params: vec![],
+    })
+}
+
+/// Runs a script's source; `path` names it in messages. The script runs on its own thread
+/// with a large stack, so deep (but limited) recursion in scripts cannot overflow ours.
+pub fn load_script(
+    path: &Path,
+    source: &str,
+    params: &[(String, f64)],
+) -> Result<Model, ScriptError> {
+    std::thread::scope(|scope| {
+        let worker = std::thread::Builder::new()
+            .name("isoforge-script".into())
+            .stack_size(engine::SCRIPT_STACK)
+            .spawn_scoped(scope, || run(path, source, params))
+            .map_err(|e| {
+                ScriptError(format!(
+                    "{}: cannot start the script thread: {e}",
+                    path.display()
+                ))
+            })?;
+        worker.join().unwrap_or_else(|_| {
+            Err(ScriptError(format!(
+                "{}: the script interpreter crashed (a bug in isoforge; please report it)",
+                path.display()
+            )))
+        })
+    })
+}
+
+fn run(path: &Path, source: &str, params: &[(String, f64)]) -> Result<Model, ScriptError> {
+    let shared = Arc::new(Mutex::new(params::Declared {
+        overrides: params.to_vec(),
+        ..Default::default()
+    }));
+    let engine = engine::build(&shared);
+    let Some(last_line) = last_code_line(source) else {
+        return Err(ScriptError(format!(
+            "{}: the script is empty: it must end with a shape, such as Sphere(1)",
+            path.display()
+        )));
+    };
+    let rewritten = notation::rewrite(source);
+    let at = errors::Locator {
+        path,
+        map: &rewritten,
+    };
+    let ast = engine
+        .compile(&rewritten.source)
+        .map_err(|e| errors::parse_error(at, &e))?;
+    let result: Dynamic = engine
+        .eval_ast(&ast)
+        .map_err(|e| errors::eval_error(at, &e))?;
+    let declared = std::mem::take(&mut *shared.lock().unwrap_or_else(|e| e.into_inner()));
+    let unknown = params::undeclared(&declared);
+    if !unknown.is_empty() {
+        let known: Vec<&str> = declared.params.iter().map(|p| p.name.as_str()).collect();
+        return Err(ScriptError(format!(
+            "{}: --param {}: the script declares no such parameter (it declares: {})",
+            path.display(),
+            unknown.join(", "),
+            if known.is_empty() {
+                "none".to_string()
+            } else {
+                known.join(", ")
+            }
+        )));
+    }
+    let shape = model_shape(path, last_line, result)?;
+    Ok(Model {
+        shape,
+        bounds: declared.bounds,
+        params: declared.params,
+    })
+}
+
+/// The script's value as a Shape, or an error that says what it was instead.
+fn model_shape(path: &Path, last_line: usize, result: Dynamic) -> Result<Shape, ScriptError> {
+    if let Some(s) = result.clone().try_cast::<Shape>() {
+        return Ok(s);
+    }
+    let what = if let Some(v) = args::as_number(&result) {
+        format!("the model evaluated to a number ({v}), not a shape")
+    } else if result.is_unit() {
+        "the model evaluated to nothing, not a shape (does the last statement end with `;` \
+         or is it a `let`?)"
+            .to_string()
+    } else {
+        format!(
+            "the model evaluated to {}, not a shape",
+            args::type_name(&result)
+        )
+    };
+    Err(ScriptError(format!(
+        "{}:{last_line}: {what}: the script's last expression must be the model, \
+         such as Sphere(1)",
+        path.display()
+    )))
+}
+
+/// The 1-based number of the last line holding code (not blank, not only a `//` comment);
+/// `None` for a script with no code at all.
+fn last_code_line(source: &str) -> Option<usize> {
+    let mut in_block = false;
+    let mut last = None;
+    for (i, line) in source.lines().enumerate() {
+        let mut rest = line.trim();
+        let mut code = false;
+        while !rest.is_empty() {
+            if in_block {
+                match rest.find("*/") {
+                    Some(end) => {
+                        rest = rest[end + 2..].trim_start();
+                        in_block = false;
+                    }
+                    None => rest = "",
+                }
+            } else if rest.starts_with("//") {
+                rest = "";
+            } else if let Some(after) = rest.strip_prefix("/*") {
+                rest = after;
+                in_block = true;
+            } else {
+                code = true;
+                break;
+            }
+        }
+        if code {
+            last = Some(i + 1);
+        }
+    }
+    last
 }
 
 /// Finds a region enclosing the model by interval pruning of a large box.
 pub fn find_bounds(shape: &Shape) -> Result<Bounds, ScriptError> {
-    let _ = shape;
-    todo!("script helper")
+    region::find_bounds(shape)
 }

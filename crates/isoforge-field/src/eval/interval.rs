@@ -1,28 +1,232 @@
 //! The interval evaluator: rigorous enclosures over a box, and the min/max choices that
 //! drive tape simplification.
+//!
+//! Every register carries an interval and a "may be NaN" bit. An operation that can give
+//! NaN somewhere on its input box (sqrt below 0, 0 * inf, inf - inf, 0 / 0, ...) sets the
+//! bit and makes its register `ENTIRE`; the bit flows to everything computed from it, and
+//! a set bit at the output makes the result `ENTIRE`. A min or max with a NaN-possible
+//! side records `Both`, so simplification never drops a branch that could make the point
+//! value NaN.
 
 use inari::Interval;
 
-use crate::tape::{Choice, Tape};
+use crate::eval::enclose::{self, has_zero, unbounded};
+use crate::op::{BinaryOp, UnaryOp};
+use crate::shape::Var;
+use crate::tape::{Choice, Op, Tape};
 
 /// Evaluates a tape over a box. Reuse one per thread.
 #[derive(Default)]
-pub struct IntervalEval {}
+pub struct IntervalEval {
+    regs: Vec<Interval>,
+    nan: Vec<bool>,
+    choices: Vec<Choice>,
+}
+
+/// An operation on one interval: `(enclosure, may be NaN)`.
+fn unary(op: UnaryOp, a: Interval) -> (Interval, bool) {
+    if a.is_empty() {
+        return (Interval::ENTIRE, true);
+    }
+    match op {
+        UnaryOp::Neg => (-a, false),
+        UnaryOp::Abs => (a.abs(), false),
+        UnaryOp::Recip => {
+            // 1 / ±0 is ±inf; inari's [0, x] reciprocal excludes -inf, which -0 gives.
+            if has_zero(a) {
+                (Interval::ENTIRE, false)
+            } else {
+                (a.recip(), false)
+            }
+        }
+        UnaryOp::Sqrt => {
+            if a.inf() < 0.0 {
+                (Interval::ENTIRE, true)
+            } else {
+                (a.sqrt(), false)
+            }
+        }
+        UnaryOp::Square => (a.sqr(), false),
+        UnaryOp::Sin => enclose::sin(a),
+        UnaryOp::Cos => enclose::cos(a),
+        UnaryOp::Tan => enclose::tan(a),
+        UnaryOp::Asin => enclose::asin(a),
+        UnaryOp::Acos => enclose::acos(a),
+        UnaryOp::Atan => enclose::atan(a),
+        UnaryOp::Exp => enclose::exp(a),
+        UnaryOp::Ln => enclose::ln(a),
+        UnaryOp::Floor => (a.floor(), false),
+        UnaryOp::Ceil => (a.ceil(), false),
+        UnaryOp::Round => (a.round(), false),
+        UnaryOp::PowI(n) => enclose::powi(a, n),
+    }
+}
+
+/// An operation on two intervals: `(enclosure, may be NaN)`.
+fn binary(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
+    if a.is_empty() || b.is_empty() {
+        return (Interval::ENTIRE, true);
+    }
+    let inf = f64::INFINITY;
+    let r = match op {
+        BinaryOp::Add => {
+            let nan = (a.sup() == inf && b.inf() == -inf) || (a.inf() == -inf && b.sup() == inf);
+            (a + b, nan)
+        }
+        BinaryOp::Sub => {
+            let nan = (a.sup() == inf && b.sup() == inf) || (a.inf() == -inf && b.inf() == -inf);
+            (a - b, nan)
+        }
+        BinaryOp::Mul => {
+            let nan = (has_zero(a) && unbounded(b)) || (has_zero(b) && unbounded(a));
+            (a * b, nan)
+        }
+        BinaryOp::Div => {
+            let nan = (has_zero(a) && has_zero(b)) || (unbounded(a) && unbounded(b));
+            if has_zero(b) {
+                // Division by ±0 gives either infinity (sign from the zero's sign).
+                (Interval::ENTIRE, nan)
+            } else {
+                (a / b, nan)
+            }
+        }
+        BinaryOp::Min => (a.min(b), false),
+        BinaryOp::Max => (a.max(b), false),
+        BinaryOp::Atan2 => enclose::atan2(a, b),
+        BinaryOp::Pow => enclose::pow(a, b),
+        BinaryOp::Mod => enclose::modulo(a, b),
+    };
+    if r.0.is_empty() {
+        (Interval::ENTIRE, true)
+    } else {
+        r
+    }
+}
+
+/// The choice of a min or max given its operands' intervals and NaN bits.
+fn choose(op: BinaryOp, a: Interval, an: bool, b: Interval, bn: bool) -> Option<Choice> {
+    if !matches!(op, BinaryOp::Min | BinaryOp::Max) {
+        return None;
+    }
+    let c = if an || bn {
+        Choice::Both
+    } else {
+        match op {
+            BinaryOp::Min if a.sup() < b.inf() => Choice::Left,
+            BinaryOp::Min if b.sup() < a.inf() => Choice::Right,
+            BinaryOp::Max if a.inf() > b.sup() => Choice::Left,
+            BinaryOp::Max if b.inf() > a.sup() => Choice::Right,
+            _ => Choice::Both,
+        }
+    };
+    Some(c)
+}
 
 impl IntervalEval {
     /// A new evaluator.
     pub fn new() -> Self {
-        todo!("isoforge-field helper")
+        Self::default()
     }
+
     /// An interval that encloses f over the box. Where f may be undefined (NaN) somewhere
     /// in the box the result is `Interval::ENTIRE`, never a false all-negative or
     /// all-positive answer.
     pub fn eval(&mut self, tape: &Tape, b: [Interval; 3]) -> Interval {
-        let _ = (tape, b);
-        todo!("isoforge-field helper")
+        let (v, nan) = self.eval_nan(tape, b);
+        if nan { Interval::ENTIRE } else { v }
     }
+
+    /// Like [`IntervalEval::eval`], but returns the enclosure of the non-NaN values and
+    /// separately whether some point of the box may give NaN.
+    pub fn eval_nan(&mut self, tape: &Tape, b: [Interval; 3]) -> (Interval, bool) {
+        let n = tape.register_count();
+        if self.regs.len() < n {
+            self.regs.resize(n, Interval::ENTIRE);
+            self.nan.resize(n, false);
+        }
+        self.choices.clear();
+        let (r, nr) = (&mut self.regs[..], &mut self.nan[..]);
+        for op in tape.ops() {
+            let (out, v, nan) = match *op {
+                Op::Var { out, v } => {
+                    let i = match v {
+                        Var::X => b[0],
+                        Var::Y => b[1],
+                        Var::Z => b[2],
+                    };
+                    (out, i, i.is_empty())
+                }
+                Op::Const { out, c } => {
+                    if c.is_nan() {
+                        (out, Interval::ENTIRE, true)
+                    } else {
+                        (out, enclose::interval(c, c), false)
+                    }
+                }
+                Op::Unary { op, out, a } => {
+                    let (v, nan) = unary(op, r[a as usize]);
+                    (out, v, nan || nr[a as usize])
+                }
+                Op::Binary { op, out, a, b } => {
+                    let (ia, ib) = (r[a as usize], r[b as usize]);
+                    let (na, nb) = (nr[a as usize], nr[b as usize]);
+                    if let Some(c) = choose(op, ia, na, ib, nb) {
+                        self.choices.push(c);
+                    }
+                    let (v, nan) = binary(op, ia, ib);
+                    (out, v, nan || na || nb)
+                }
+                Op::BinaryRI { op, out, a, imm } => {
+                    let (ia, na) = (r[a as usize], nr[a as usize]);
+                    let (ib, nb) = imm_interval(imm);
+                    if let Some(c) = choose(op, ia, na, ib, nb) {
+                        self.choices.push(c);
+                    }
+                    let (v, nan) = binary(op, ia, ib);
+                    (out, v, nan || na || nb)
+                }
+                Op::BinaryIR { op, out, imm, b } => {
+                    let (ib, nb) = (r[b as usize], nr[b as usize]);
+                    let (ia, na) = imm_interval(imm);
+                    if let Some(c) = choose(op, ia, na, ib, nb) {
+                        self.choices.push(c);
+                    }
+                    let (v, nan) = binary(op, ia, ib);
+                    (out, v, nan || na || nb)
+                }
+                Op::Custom { k, out, args } => {
+                    let ins = args.map(|a| r[a as usize]);
+                    // A callback handed an unbounded box may meet infinite points, where
+                    // its own arithmetic can give NaN (inf - inf): count that as possible.
+                    let nan =
+                        args.iter().any(|&a| nr[a as usize]) || ins.iter().any(|&i| unbounded(i));
+                    let v = tape.customs()[k as usize].interval(ins);
+                    if v.is_empty() {
+                        (out, Interval::ENTIRE, true)
+                    } else {
+                        (out, v, nan)
+                    }
+                }
+            };
+            let nan = nan || v.is_empty();
+            r[out as usize] = if nan { Interval::ENTIRE } else { v };
+            nr[out as usize] = nan;
+        }
+        let o = tape.output();
+        (r[o], nr[o])
+    }
+
     /// The choices of the last `eval`, one per min/max of its tape, in tape order.
     pub fn choices(&self) -> &[Choice] {
-        todo!("isoforge-field helper")
+        &self.choices
+    }
+}
+
+/// An immediate operand as an interval (NaN immediates are NaN everywhere).
+fn imm_interval(c: f64) -> (Interval, bool) {
+    if c.is_nan() {
+        (Interval::ENTIRE, true)
+    } else {
+        (enclose::interval(c, c), false)
     }
 }

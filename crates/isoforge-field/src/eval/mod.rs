@@ -1,6 +1,7 @@
 //! Evaluators on a [`crate::Tape`].
 
 pub mod batch;
+pub mod enclose;
 pub mod grad;
 pub mod interval;
 pub mod point;

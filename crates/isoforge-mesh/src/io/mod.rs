@@ -1,8 +1,22 @@
-//! Mesh readers and writers.
+//! Mesh readers and writers: STL (binary and ASCII), OBJ, PLY and 3MF.
+//!
+//! Readers take the whole file as bytes, pick the format by content (falling back on the
+//! extension), and never panic: every malformed input is a [`MeshIoError::Parse`] naming the
+//! file and the line (text formats) or byte offset (binary formats). Writers produce the
+//! whole file in a temporary beside the target and rename it into place.
 
+pub mod obj;
+pub mod ply;
+pub mod stl;
+pub mod threemf;
+mod weld;
+
+use std::io::Write;
 use std::path::Path;
 
 use crate::mesh::Mesh;
+
+pub(crate) use weld::Welder;
 
 /// A mesh file format.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -17,6 +31,60 @@ pub enum MeshFormat {
     Obj,
     /// PLY (binary little-endian when written).
     Ply,
+}
+
+impl MeshFormat {
+    /// The format a file name's extension names (`.stl` is binary STL), if any.
+    pub fn from_extension(path: &Path) -> Option<MeshFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "stl" => Some(MeshFormat::Stl),
+            "3mf" => Some(MeshFormat::ThreeMf),
+            "obj" => Some(MeshFormat::Obj),
+            "ply" => Some(MeshFormat::Ply),
+            _ => None,
+        }
+    }
+
+    /// The format for a command-line name: `stl`, `stl-ascii`, `3mf`, `obj`, `ply`.
+    pub fn from_name(name: &str) -> Option<MeshFormat> {
+        match name.to_ascii_lowercase().as_str() {
+            "stl" => Some(MeshFormat::Stl),
+            "stl-ascii" => Some(MeshFormat::StlAscii),
+            "3mf" => Some(MeshFormat::ThreeMf),
+            "obj" => Some(MeshFormat::Obj),
+            "ply" => Some(MeshFormat::Ply),
+            _ => None,
+        }
+    }
+
+    /// The command-line name of the format.
+    pub fn name(self) -> &'static str {
+        match self {
+            MeshFormat::Stl => "stl",
+            MeshFormat::StlAscii => "stl-ascii",
+            MeshFormat::ThreeMf => "3mf",
+            MeshFormat::Obj => "obj",
+            MeshFormat::Ply => "ply",
+        }
+    }
+
+    /// Recognises a format by a file's first bytes and size, where that is unambiguous.
+    pub fn sniff(bytes: &[u8]) -> Option<MeshFormat> {
+        if bytes.starts_with(b"PK\x03\x04") {
+            return Some(MeshFormat::ThreeMf);
+        }
+        if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
+            return Some(MeshFormat::Ply);
+        }
+        if stl::is_binary_size(bytes) {
+            return Some(MeshFormat::Stl);
+        }
+        if stl::looks_ascii(bytes) {
+            return Some(MeshFormat::StlAscii);
+        }
+        None
+    }
 }
 
 /// A mesh file could not be read or written.
@@ -40,14 +108,133 @@ pub enum MeshIoError {
     },
 }
 
+/// What a format parser reports: the message says where (line or byte offset); the
+/// dispatcher adds the file name.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParseError(pub String);
+
+impl std::fmt::Display for ParseError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+/// Shorthand for a parse failure at a text line.
+pub(crate) fn at_line(line: usize, what: impl std::fmt::Display) -> ParseError {
+    ParseError(format!("line {line}: {what}"))
+}
+
+/// Shorthand for a parse failure at a byte offset.
+pub(crate) fn at_byte(offset: usize, what: impl std::fmt::Display) -> ParseError {
+    ParseError(format!("byte {offset}: {what}"))
+}
+
 /// Reads a mesh, choosing the format by content and extension.
 pub fn read_mesh(path: &Path) -> Result<Mesh, MeshIoError> {
-    let _ = path;
-    todo!("mesh io helper")
+    let bytes = std::fs::read(path).map_err(|source| MeshIoError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
+    read_mesh_bytes(&bytes, &path.display().to_string())
+}
+
+/// Parses a mesh held in memory. `name` is the file name: its extension is the fallback
+/// when the content does not name its format, and errors start with it.
+pub fn read_mesh_bytes(bytes: &[u8], name: &str) -> Result<Mesh, MeshIoError> {
+    let format = MeshFormat::sniff(bytes)
+        .or_else(|| MeshFormat::from_extension(Path::new(name)))
+        .or_else(|| obj::looks_like_obj(bytes).then_some(MeshFormat::Obj));
+    let parse_error = |e: ParseError| MeshIoError::Parse {
+        path: name.to_string(),
+        message: e.0,
+    };
+    let Some(format) = format else {
+        return Err(parse_error(ParseError(
+            "not a mesh file: expected STL (binary or ASCII), 3MF, OBJ or PLY".into(),
+        )));
+    };
+    decode(bytes, format).map_err(parse_error)
+}
+
+/// Parses bytes as the given format (binary and ASCII STL are told apart by content).
+pub fn decode(bytes: &[u8], format: MeshFormat) -> Result<Mesh, ParseError> {
+    match format {
+        MeshFormat::Stl | MeshFormat::StlAscii => stl::read(bytes),
+        MeshFormat::ThreeMf => threemf::read(bytes),
+        MeshFormat::Obj => obj::read(bytes),
+        MeshFormat::Ply => ply::read(bytes),
+    }
+}
+
+/// Encodes a mesh in a format onto a writer. The mesh's indices must be in range.
+pub fn encode(mesh: &Mesh, format: MeshFormat, w: &mut dyn Write) -> std::io::Result<()> {
+    if !mesh.has_valid_indices() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "the mesh has a triangle index past its last vertex",
+        ));
+    }
+    match format {
+        MeshFormat::Stl => stl::write_binary(mesh, w),
+        MeshFormat::StlAscii => stl::write_ascii(mesh, w),
+        MeshFormat::ThreeMf => threemf::write(mesh, w),
+        MeshFormat::Obj => obj::write(mesh, w),
+        MeshFormat::Ply => ply::write(mesh, w),
+    }
 }
 
 /// Writes a mesh whole or not at all (temporary file, then rename).
 pub fn write_mesh(mesh: &Mesh, path: &Path, format: MeshFormat) -> Result<(), MeshIoError> {
-    let _ = (mesh, path, format);
-    todo!("mesh io helper")
+    let io_error = |source| MeshIoError::Io {
+        path: path.display().to_string(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(io_error)?;
+    {
+        let mut w = std::io::BufWriter::with_capacity(1 << 20, tmp.as_file_mut());
+        encode(mesh, format, &mut w).map_err(io_error)?;
+        w.flush().map_err(io_error)?;
+    }
+    tmp.persist(path).map_err(|e| io_error(e.error))?;
+    Ok(())
 }
+
+/// Writes a value for text formats: shortest text that reads back to the same f32, with
+/// `-0.0` written as `0` so readers that weld by bit pattern see one vertex.
+pub(crate) fn fmt_coord(v: f32) -> String {
+    let v = v + 0.0;
+    format!("{v}")
+}
+
+/// Parses one coordinate token of a text format: finite f32 or an error.
+pub(crate) fn parse_coord(token: &str, line: usize) -> Result<f32, ParseError> {
+    let v: f32 = token
+        .parse()
+        .map_err(|_| at_line(line, format!("{token:?} is not a number")))?;
+    if !v.is_finite() {
+        return Err(at_line(
+            line,
+            format!("coordinate {token:?} is not a finite number"),
+        ));
+    }
+    Ok(v)
+}
+
+/// The lines of a text file, numbered from 1, each as text (an error names a line that is
+/// not UTF-8).
+pub(crate) fn text_lines(bytes: &[u8]) -> impl Iterator<Item = Result<(usize, &str), ParseError>> {
+    bytes.split(|&b| b == b'\n').enumerate().map(|(i, raw)| {
+        let line = i + 1;
+        let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
+        std::str::from_utf8(raw)
+            .map(|s| (line, s))
+            .map_err(|_| at_line(line, "not text (invalid UTF-8)"))
+    })
+}
+
+#[cfg(test)]
+mod tests;

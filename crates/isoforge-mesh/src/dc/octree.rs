@@ -1,0 +1,226 @@
+//! The interval octree: from the root cube down to blocks of `2^BLOCK_SHIFT` cells a side,
+//! keeping only the blocks whose interval may change sign.
+//!
+//! Below the block level the mesher stops using intervals and samples the block densely in
+//! one batch call with the block's simplified tape (see `hermite.rs`): at that size a dense
+//! grid costs less than the interval evaluations and simplifications it would replace, and
+//! it has no per-cell overhead. Every cell beside a sign-changing edge lies in a block whose
+//! closed box holds both of the edge's corners, so that block's interval cannot be
+//! one-signed: such blocks are always kept.
+
+use isoforge_field::Bounds;
+use isoforge_field::Interval;
+use rayon::prelude::*;
+
+use super::sampler::{Clip, EvalPool, Sampler};
+
+/// Blocks are 2^BLOCK_SHIFT cells a side. 8³-cell blocks (729 corners) keep the dense
+/// waste low (a surface crosses ~1/8 of a block's cells) while an interval evaluation plus
+/// tape simplification costs about as much as sampling a whole block in batch.
+pub const BLOCK_SHIFT: u32 = 3;
+
+/// The lattice: cubes of side `cell` from `origin`, `2^depth` along each axis.
+#[derive(Clone, Copy, Debug)]
+pub struct Grid {
+    /// The lattice's lowest corner (the region's lowest corner).
+    pub origin: [f64; 3],
+    /// The finest cell's side.
+    pub cell: f64,
+    /// Finest level.
+    pub depth: u32,
+    /// Level of the blocks.
+    pub block_level: u32,
+    /// Cells per block side.
+    pub block: usize,
+}
+
+impl Grid {
+    /// The lattice over a region: the longest side is split in 2^depth cells.
+    pub fn new(bounds: &Bounds, depth: u32) -> Grid {
+        let shift = BLOCK_SHIFT.min(depth);
+        Grid {
+            origin: bounds.min,
+            cell: bounds.longest_side() / f64::from(1u32 << depth),
+            depth,
+            block_level: depth - shift,
+            block: 1 << shift,
+        }
+    }
+
+    /// The position of lattice corner `g`.
+    pub fn corner(&self, g: [i64; 3]) -> [f64; 3] {
+        [0, 1, 2].map(|i| self.origin[i] + g[i] as f64 * self.cell)
+    }
+
+    /// Blocks per axis.
+    pub fn blocks_per_side(&self) -> i64 {
+        1 << self.block_level
+    }
+
+    /// The box of the cube `coords` at `level`.
+    fn cube(&self, level: u32, coords: [i64; 3]) -> [Interval; 3] {
+        let cells = (1i64 << (self.depth - level)) as f64 * self.cell;
+        [0, 1, 2].map(|i| {
+            let lo = self.origin[i] + coords[i] as f64 * cells;
+            Interval::try_from((lo, lo + cells)).unwrap_or(Interval::ENTIRE)
+        })
+    }
+}
+
+/// What a block of the lattice is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Class {
+    /// Every point outside (or outside the lattice).
+    Empty,
+    /// Every point inside.
+    Full,
+    /// May hold surface: the block with this index in [`Octree::blocks`].
+    Block(u32),
+}
+
+enum Node {
+    Empty,
+    Full,
+    Block(u32),
+    Branch(Vec<Node>),
+}
+
+enum Built<L> {
+    Empty,
+    Full,
+    Block(L),
+    Branch(Vec<Built<L>>),
+}
+
+/// A block that may hold surface, with the field narrowed to it.
+pub struct Block<L> {
+    /// Block coordinates (block units).
+    pub coords: [i64; 3],
+    /// The field narrowed to the block.
+    pub local: L,
+}
+
+/// The pruned tree, and its blocks in Morton order.
+pub struct Octree<L> {
+    root: Node,
+    /// The blocks that may hold surface.
+    pub blocks: Vec<Block<L>>,
+    /// The lattice.
+    pub grid: Grid,
+}
+
+impl<L: Clone + Send + Sync> Octree<L> {
+    /// Builds the tree with interval pruning, in parallel over subtrees.
+    pub fn build<S: Sampler<Local = L>>(sampler: &S, clip: &Clip, grid: Grid) -> Octree<L> {
+        let pool = EvalPool::new(sampler);
+        let ctx = BuildCtx {
+            sampler,
+            pool: &pool,
+            clip,
+            grid,
+        };
+        let built = ctx.build(0, [0; 3], &sampler.root());
+        let mut blocks = Vec::new();
+        let root = number(built, [0; 3], &mut blocks);
+        Octree { root, blocks, grid }
+    }
+
+    /// The class of the block at `coords` (block units); outside the lattice is empty.
+    pub fn class(&self, coords: [i64; 3]) -> Class {
+        let n = self.grid.blocks_per_side();
+        if coords.iter().any(|&c| c < 0 || c >= n) {
+            return Class::Empty;
+        }
+        let mut node = &self.root;
+        let mut level = 0;
+        loop {
+            match node {
+                Node::Empty => return Class::Empty,
+                Node::Full => return Class::Full,
+                Node::Block(i) => return Class::Block(*i),
+                Node::Branch(children) => {
+                    let shift = self.grid.block_level - level - 1;
+                    let child = ((coords[0] >> shift) & 1)
+                        | ((coords[1] >> shift) & 1) << 1
+                        | ((coords[2] >> shift) & 1) << 2;
+                    match children.get(child as usize) {
+                        Some(c) => node = c,
+                        None => return Class::Empty,
+                    }
+                    level += 1;
+                }
+            }
+        }
+    }
+}
+
+struct BuildCtx<'a, 's, S: Sampler> {
+    sampler: &'s S,
+    pool: &'a EvalPool<'s, S>,
+    clip: &'a Clip,
+    grid: Grid,
+}
+
+impl<S: Sampler> BuildCtx<'_, '_, S> {
+    fn build(&self, level: u32, coords: [i64; 3], local: &S::Local) -> Built<S::Local> {
+        let b = self.grid.cube(level, coords);
+        let (dlo, dhi) = self.clip.interval(b);
+        if dlo >= 0.0 {
+            return Built::Empty;
+        }
+        let mut guard = self.pool.take();
+        let f = self.sampler.interval(guard.get(), local, b);
+        // F = max(f, d_box); an empty f interval means f is NaN everywhere: outside.
+        let lo = f.inf().max(dlo);
+        let hi = if f.is_empty() {
+            f64::INFINITY
+        } else {
+            f.sup().max(dhi)
+        };
+        if lo >= 0.0 || lo.is_nan() {
+            return Built::Empty;
+        }
+        if hi < 0.0 {
+            return Built::Full;
+        }
+        let narrowed = self.sampler.narrow(guard.get(), local);
+        drop(guard);
+        if level == self.grid.block_level {
+            return Built::Block(narrowed);
+        }
+        let children: Vec<Built<S::Local>> = (0..8i64)
+            .into_par_iter()
+            .map(|c| {
+                let child = [0, 1, 2].map(|i| coords[i] * 2 + ((c >> i) & 1));
+                self.build(level + 1, child, &narrowed)
+            })
+            .collect();
+        if children.iter().all(|c| matches!(c, Built::Empty)) {
+            Built::Empty
+        } else {
+            Built::Branch(children)
+        }
+    }
+}
+
+/// Numbers the blocks in tree (Morton) order, so output is the same on every run.
+fn number<L>(built: Built<L>, coords: [i64; 3], blocks: &mut Vec<Block<L>>) -> Node {
+    match built {
+        Built::Empty => Node::Empty,
+        Built::Full => Node::Full,
+        Built::Block(local) => {
+            blocks.push(Block { coords, local });
+            Node::Block((blocks.len() - 1) as u32)
+        }
+        Built::Branch(children) => Node::Branch(
+            children
+                .into_iter()
+                .enumerate()
+                .map(|(c, child)| {
+                    let cc = [0, 1, 2].map(|i| coords[i] * 2 + ((c as i64 >> i) & 1));
+                    number(child, cc, blocks)
+                })
+                .collect(),
+        ),
+    }
+}

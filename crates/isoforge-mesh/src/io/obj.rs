@@ -1,0 +1,115 @@
+//! Wavefront OBJ: `v x y z` vertices and `f` faces.
+//!
+//! Faces may name corners as `i`, `i/t`, `i//n` or `i/t/n`; negative indices count back
+//! from the last vertex defined so far; polygons are fanned into triangles. Texture
+//! coordinates, normals, groups and materials are skipped.
+
+use std::io::Write;
+
+use super::{ParseError, at_line, fmt_coord, parse_coord, text_lines};
+use crate::mesh::Mesh;
+
+/// True when a file's opening lines look like OBJ (for files without a known extension).
+pub fn looks_like_obj(bytes: &[u8]) -> bool {
+    let head = &bytes[..bytes.len().min(4096)];
+    let Ok(text) = std::str::from_utf8(head) else {
+        // The cut may land inside a multi-byte character; judge by what decodes.
+        return false;
+    };
+    text.lines()
+        .any(|l| l.starts_with("v ") || l.starts_with("f ") || l.starts_with("vn "))
+}
+
+/// Reads an OBJ file.
+pub fn read(bytes: &[u8]) -> Result<Mesh, ParseError> {
+    let mut mesh = Mesh::default();
+    let mut corners: Vec<u32> = Vec::with_capacity(8);
+    for item in text_lines(bytes) {
+        let (line, text) = item?;
+        let text = text.split('#').next().unwrap_or("");
+        let mut toks = text.split_ascii_whitespace();
+        let Some(kw) = toks.next() else { continue };
+        match kw {
+            "v" => {
+                let mut p = [0f32; 3];
+                for v in &mut p {
+                    let t = toks
+                        .next()
+                        .ok_or_else(|| at_line(line, "a vertex needs x, y and z"))?;
+                    *v = parse_coord(t, line)?;
+                }
+                // An optional w (or r g b vertex colours) may follow: ignored.
+                if mesh.vertices.len() >= u32::MAX as usize {
+                    return Err(at_line(line, "more than 2^32 vertices"));
+                }
+                mesh.vertices.push(p);
+            }
+            "f" => {
+                corners.clear();
+                for t in toks {
+                    corners.push(resolve(t, mesh.vertices.len(), line)?);
+                }
+                if corners.len() < 3 {
+                    return Err(at_line(
+                        line,
+                        format!("a face has {} corners; needs at least 3", corners.len()),
+                    ));
+                }
+                for k in 1..corners.len() - 1 {
+                    mesh.triangles
+                        .push([corners[0], corners[k], corners[k + 1]]);
+                }
+            }
+            // Everything else (vt, vn, vp, o, g, s, l, p, usemtl, mtllib, ...) carries no
+            // geometry we keep.
+            _ => {}
+        }
+    }
+    Ok(mesh)
+}
+
+/// Turns one face corner (`i`, `i/t`, `i//n`, `i/t/n`) into a 0-based vertex index.
+fn resolve(token: &str, defined: usize, line: usize) -> Result<u32, ParseError> {
+    let first = token.split('/').next().unwrap_or("");
+    let idx: i64 = first
+        .parse()
+        .map_err(|_| at_line(line, format!("face corner {token:?} is not a vertex index")))?;
+    let zero_based = if idx > 0 {
+        idx - 1
+    } else if idx < 0 {
+        defined as i64 + idx
+    } else {
+        return Err(at_line(line, "vertex index 0 (OBJ counts from 1)"));
+    };
+    if zero_based < 0 || zero_based >= defined as i64 {
+        return Err(at_line(
+            line,
+            format!("vertex index {idx} is out of range: {defined} vertices defined so far"),
+        ));
+    }
+    Ok(zero_based as u32)
+}
+
+/// Writes an OBJ file (1-based indices).
+pub fn write(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(w, "# isoforge")?;
+    writeln!(
+        w,
+        "# {} vertices, {} triangles",
+        mesh.vertices.len(),
+        mesh.triangles.len()
+    )?;
+    for p in &mesh.vertices {
+        writeln!(
+            w,
+            "v {} {} {}",
+            fmt_coord(p[0]),
+            fmt_coord(p[1]),
+            fmt_coord(p[2])
+        )?;
+    }
+    for t in &mesh.triangles {
+        writeln!(w, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
+    }
+    Ok(())
+}

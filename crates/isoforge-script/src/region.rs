@@ -1,0 +1,201 @@
+//! Finding a model's region by interval pruning, and proving a region empty.
+//!
+//! Starting from a large box, cells whose interval is all positive are dropped and the rest
+//! are split, level by level (an octree that only descends where the model may be). Cells
+//! whose interval is all negative are inside the model and need no splitting. The bounding
+//! box of what remains encloses the model, since intervals are rigorous enclosures.
+
+use isoforge_field::{Bounds, Interval, IntervalEval, Shape, Tape};
+
+use crate::ScriptError;
+
+/// Half the side of the box the search starts from, in millimetres.
+pub const SEARCH_HALF_SIDE: f64 = 1e4;
+
+/// Levels of splitting at most: 2e4 mm / 2^40 is far below any printable feature.
+const MAX_LEVELS: usize = 40;
+
+/// Cells kept per level at most: enough for a tight box around a model with a large
+/// surface, few enough that finding bounds takes milliseconds, not seconds.
+const MAX_CELLS: usize = 32_768;
+
+/// Splitting stops once the cells are this fraction of the found box's longest side:
+/// the box is then tight to within that fraction, well inside the padding.
+const TIGHTNESS: f64 = 1.0 / 128.0;
+
+/// Padding added on every side, as a fraction of the box's longest side, so that surfaces
+/// do not lie on the region's faces (the mesher would cap them there).
+const PADDING: f64 = 0.04;
+
+type Cell = ([f64; 3], [f64; 3]);
+
+fn interval(lo: f64, hi: f64) -> Interval {
+    Interval::try_from((lo, hi)).unwrap_or(Interval::ENTIRE)
+}
+
+fn eval(ev: &mut IntervalEval, tape: &Tape, (lo, hi): &Cell) -> Interval {
+    ev.eval(tape, [0, 1, 2].map(|i| interval(lo[i], hi[i])))
+}
+
+fn children((lo, hi): &Cell) -> impl Iterator<Item = Cell> + '_ {
+    let mid = [0, 1, 2].map(|i| 0.5 * (lo[i] + hi[i]));
+    (0..8).map(move |k| {
+        let mut a = [0.0; 3];
+        let mut b = [0.0; 3];
+        for i in 0..3 {
+            if k >> i & 1 == 0 {
+                (a[i], b[i]) = (lo[i], mid[i]);
+            } else {
+                (a[i], b[i]) = (mid[i], hi[i]);
+            }
+        }
+        (a, b)
+    })
+}
+
+/// What pruning left: cells that may hold surface, and the box of cells proven inside.
+struct Pruned {
+    ambiguous: Vec<Cell>,
+    full: Option<Cell>,
+}
+
+fn grow(acc: &mut Option<Cell>, (lo, hi): &Cell) {
+    match acc {
+        None => *acc = Some((*lo, *hi)),
+        Some((a, b)) => {
+            for i in 0..3 {
+                a[i] = a[i].min(lo[i]);
+                b[i] = b[i].max(hi[i]);
+            }
+        }
+    }
+}
+
+impl Pruned {
+    fn bbox(&self) -> Option<Cell> {
+        let mut acc = self.full;
+        for c in &self.ambiguous {
+            grow(&mut acc, c);
+        }
+        acc
+    }
+}
+
+/// Splits every ambiguous cell once, dropping children proven outside.
+fn refine(tape: &Tape, ev: &mut IntervalEval, p: Pruned) -> Pruned {
+    let mut next = Pruned {
+        ambiguous: Vec::with_capacity(p.ambiguous.len() * 2),
+        full: p.full,
+    };
+    for cell in &p.ambiguous {
+        for child in children(cell) {
+            let v = eval(ev, tape, &child);
+            if v.inf() > 0.0 {
+                continue;
+            }
+            if v.sup() < 0.0 {
+                grow(&mut next.full, &child);
+            } else {
+                next.ambiguous.push(child);
+            }
+        }
+    }
+    next
+}
+
+fn prune(
+    tape: &Tape,
+    ev: &mut IntervalEval,
+    root: Cell,
+    mut stop: impl FnMut(&Pruned, f64) -> bool,
+) -> Pruned {
+    let v = eval(ev, tape, &root);
+    let mut p = if v.inf() > 0.0 {
+        Pruned {
+            ambiguous: vec![],
+            full: None,
+        }
+    } else if v.sup() < 0.0 {
+        Pruned {
+            ambiguous: vec![],
+            full: Some(root),
+        }
+    } else {
+        Pruned {
+            ambiguous: vec![root],
+            full: None,
+        }
+    };
+    let mut side = (0..3).map(|i| root.1[i] - root.0[i]).fold(0.0, f64::max);
+    for _ in 0..MAX_LEVELS {
+        if p.ambiguous.is_empty() || p.ambiguous.len() > MAX_CELLS || stop(&p, side) {
+            break;
+        }
+        p = refine(tape, ev, p);
+        side *= 0.5;
+    }
+    p
+}
+
+/// Finds a region enclosing the model by interval pruning of the box ±[`SEARCH_HALF_SIDE`].
+///
+/// Errors: "the model is empty" when nothing of the search box may be inside, and "the
+/// model is not bounded" when what may be inside reaches the search box's faces.
+pub fn find_bounds(shape: &Shape) -> Result<Bounds, ScriptError> {
+    let tape = Tape::new(shape);
+    let mut ev = IntervalEval::new();
+    let h = SEARCH_HALF_SIDE;
+    let root = ([-h; 3], [h; 3]);
+    let p = prune(&tape, &mut ev, root, |p, side| {
+        p.bbox().is_some_and(|(lo, hi)| {
+            let longest = (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
+            side <= longest * TIGHTNESS
+        })
+    });
+    let Some((lo, hi)) = p.bbox() else {
+        return Err(ScriptError(format!(
+            "the model is empty: no point within ±{h} mm of the origin is inside it"
+        )));
+    };
+    let touches = (0..3).any(|i| lo[i] <= -h || hi[i] >= h);
+    if touches {
+        return Err(ScriptError(format!(
+            "the model is not bounded: it reaches ±{h} mm from the origin. Give it a region: \
+             bounds([x0, y0, z0], [x1, y1, z1]) in the script, or --bounds X0,Y0,Z0,X1,Y1,Z1"
+        )));
+    }
+    let longest = (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
+    let pad = PADDING * longest;
+    Bounds::new(lo.map(|v| v - pad), hi.map(|v| v + pad)).ok_or_else(|| {
+        ScriptError(format!(
+            "the model's region came out degenerate: {lo:?} to {hi:?}"
+        ))
+    })
+}
+
+/// Levels the emptiness check splits a region into (8^4 = 4096 cells at most).
+const EMPTY_CHECK_LEVELS: usize = 4;
+
+/// True when interval arithmetic proves that no point of `region` is inside the model.
+/// False means "may not be empty" (intervals can be loose); it never wrongly says empty.
+pub fn region_is_empty(shape: &Shape, region: &Bounds) -> bool {
+    let tape = Tape::new(shape);
+    let mut ev = IntervalEval::new();
+    let mut levels = 0;
+    let p = prune(&tape, &mut ev, (region.min, region.max), |_, _| {
+        levels += 1;
+        levels > EMPTY_CHECK_LEVELS
+    });
+    p.ambiguous.is_empty() && p.full.is_none()
+}
+
+/// An error unless the model may have something inside `region`.
+pub fn ensure_not_empty(shape: &Shape, region: &Bounds) -> Result<(), ScriptError> {
+    if region_is_empty(shape, region) {
+        return Err(ScriptError(format!(
+            "the model is empty in its region {:?} to {:?}: nothing there is inside it",
+            region.min, region.max
+        )));
+    }
+    Ok(())
+}
