@@ -6,10 +6,21 @@ use std::process::Command;
 #[test]
 fn every_subcommand_has_help() {
     let bin = env!("CARGO_BIN_EXE_isoforge");
-    for sub in ["mesh", "render", "check", "info", "slice", "print", "fake-printer"] {
+    for sub in [
+        "mesh",
+        "render",
+        "check",
+        "info",
+        "slice",
+        "print",
+        "fake-printer",
+    ] {
         let out = Command::new(bin).args([sub, "--help"]).output().unwrap();
         assert!(out.status.success(), "{sub} --help failed");
-        assert!(String::from_utf8_lossy(&out.stdout).contains("Usage"), "{sub}");
+        assert!(
+            String::from_utf8_lossy(&out.stdout).contains("Usage"),
+            "{sub}"
+        );
     }
 }
 
