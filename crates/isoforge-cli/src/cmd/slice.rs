@@ -1,18 +1,277 @@
-//! `isoforge slice`.
+//! `isoforge slice`: a model script or a mesh file to G-code, an SL1 or SVX archive, or a
+//! folder of layer PNGs.
 
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::Instant;
 
-use anyhow::{Result, bail};
-use clap::Args;
+use anyhow::{Context as _, Result, bail};
+use clap::{ArgGroup, Args};
+use isoforge_mesh::Mesh;
+use isoforge_slice::raster::GridSpec;
+use isoforge_slice::{Profile, Source, render_layers, sl1, slice_gcode, svx};
 
-use crate::common::Global;
+use crate::common::{Global, ModelArgs, print_json, progress_bar, write_atomic};
 
 /// Arguments of `isoforge slice`.
 #[derive(Args, Debug)]
-pub struct SliceArgs {}
+#[command(group(ArgGroup::new("destination").required(true).args(["output", "sl1", "svx", "png_dir"])))]
+pub struct SliceArgs {
+    /// The model script (.rhai, .vm) or mesh (.stl, .3mf, .obj, .ply), with its overrides.
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Printer profile (TOML); defaults to a generic 220 x 220 Marlin printer for G-code and
+    /// an SL1 for images (fixtures/printers/ holds examples).
+    #[arg(long, value_name = "FILE")]
+    pub profile: Option<PathBuf>,
+    /// Override one profile key, e.g. --set layer_height=0.1 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Write G-code for a filament printer.
+    #[arg(short = 'o', long = "output", value_name = "OUT.gcode")]
+    pub output: Option<PathBuf>,
+    /// Write a resin-printer (SL1) archive.
+    #[arg(long, value_name = "OUT.sl1")]
+    pub sl1: Option<PathBuf>,
+    /// Write a voxel (SVX) archive.
+    #[arg(long, value_name = "OUT.svx")]
+    pub svx: Option<PathBuf>,
+    /// Write the layer PNGs alone, DIR/00000.png upward.
+    #[arg(long, value_name = "DIR")]
+    pub png_dir: Option<PathBuf>,
+}
+
+const MESH_EXTENSIONS: &[&str] = &["stl", "3mf", "obj", "ply"];
+
+/// The model, loaded: a field with its region or a mesh.
+enum Loaded {
+    Field(isoforge_field::Shape, isoforge_field::Bounds),
+    Mesh(Mesh),
+}
+
+impl Loaded {
+    fn source(&self) -> Source<'_> {
+        match self {
+            Loaded::Field(s, b) => Source::field(s, *b),
+            Loaded::Mesh(m) => Source::mesh(m),
+        }
+    }
+}
+
+fn load(args: &ModelArgs) -> Result<Loaded> {
+    let ext = args
+        .model
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    if MESH_EXTENSIONS.contains(&ext.as_str()) {
+        if !args.params.is_empty() || args.bounds.is_some() {
+            bail!(
+                "{}: --param and --bounds apply to model scripts, not meshes",
+                args.model.display()
+            );
+        }
+        let mesh = isoforge_mesh::read_mesh(&args.model)?;
+        return Ok(Loaded::Mesh(mesh));
+    }
+    let m = args.load()?;
+    Ok(Loaded::Field(m.model.shape, m.bounds))
+}
+
+fn profile(args: &SliceArgs, resin: bool) -> Result<Profile> {
+    let mut p = match &args.profile {
+        Some(path) => Profile::load(path)?,
+        None if resin => Profile::default_resin(),
+        None => Profile::default_fdm(),
+    };
+    for s in &args.set {
+        p.set(s)?;
+    }
+    Ok(p)
+}
 
 /// Runs the command.
 pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
-    let _ = (args, global);
-    bail!("not built yet")
+    let started = Instant::now();
+    let resin = args.output.is_none();
+    // Settings first: a bad profile is reported before any slow work.
+    let p = profile(&args, resin)?;
+    let loaded = load(&args.model)?;
+    let source = loaded.source();
+    let bar = progress_bar(global, 0, "slicing");
+    let progress = |done: usize, total: usize| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    };
+
+    if let Some(out) = &args.output {
+        let s = p.fdm()?;
+        let job = slice_gcode(&source, &s, &progress)?;
+        bar.finish_and_clear();
+        write_atomic(out, |w| {
+            w.write_all(job.gcode.as_bytes())?;
+            Ok(())
+        })?;
+        let seconds = started.elapsed().as_secs_f64();
+        if global.json {
+            print_json(&serde_json::json!({
+                "layers": job.stats.layers,
+                "seconds": seconds,
+                "filament_mm": job.stats.filament_mm,
+                "filament_g": job.stats.filament_g,
+                "estimated_print_seconds": job.stats.seconds,
+            }));
+        } else if !global.quiet {
+            eprintln!(
+                "{}: {} layers, {:.2} m of filament ({:.1} g), about {:.0} min to print; sliced in {:.2} s",
+                out.display(),
+                job.stats.layers,
+                job.stats.filament_mm / 1000.0,
+                job.stats.filament_g,
+                job.stats.seconds / 60.0,
+                seconds
+            );
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+
+    let r = p.resin().with_context(|| {
+        "image output (--sl1, --svx, --png-dir) needs a resin profile with pixel_size and \
+         resolution (e.g. fixtures/printers/prusa_sl1.toml)"
+    })?;
+    let spec = if args.svx.is_some() {
+        GridSpec::Fit {
+            pixel: r.layer_height,
+        }
+    } else {
+        GridSpec::Display {
+            width: r.resolution[0],
+            height: r.resolution[1],
+            pixel: r.pixel_size,
+        }
+    };
+    let images = render_layers(&source, r.layer_height, spec, &progress)?;
+    bar.finish_and_clear();
+    let height = images.layers.last().map_or(0.0, |l| l.top);
+    if height > r.max_height {
+        bail!(
+            "the model is {height:.1} mm tall, more than the printer's {:.0} mm max_height: scale it down",
+            r.max_height
+        );
+    }
+    let written: PathBuf;
+    if let Some(out) = &args.sl1 {
+        let job = job_name(out);
+        let thumb = sl1::thumbnail(
+            &images.silhouette,
+            images.silhouette_size.0,
+            images.silhouette_size.1,
+            sl1::THUMBNAIL,
+        )?;
+        write_atomic(out, |w| {
+            let mut buf = std::io::Cursor::new(Vec::new());
+            sl1::write_sl1(&mut buf, &images, &r, &job, &thumb)?;
+            w.write_all(buf.get_ref())?;
+            Ok(())
+        })?;
+        written = out.clone();
+    } else if let Some(out) = &args.svx {
+        let g = images.grid;
+        let origin = [
+            g.origin[0],
+            g.origin[1],
+            images
+                .layers
+                .first()
+                .map_or(0.0, |l| l.model_z - l.height * 0.5),
+        ];
+        write_atomic(out, |w| {
+            let mut buf = std::io::Cursor::new(Vec::new());
+            svx::write_svx(&mut buf, &images, r.layer_height, origin)?;
+            w.write_all(buf.get_ref())?;
+            Ok(())
+        })?;
+        written = out.clone();
+    } else if let Some(dir) = &args.png_dir {
+        write_png_dir(dir, &images.pngs)?;
+        written = dir.clone();
+    } else {
+        bail!("no output given: use -o OUT.gcode, --sl1 OUT.sl1, --svx OUT.svx or --png-dir DIR");
+    }
+    let seconds = started.elapsed().as_secs_f64();
+    if global.json {
+        print_json(&serde_json::json!({"layers": images.layers.len(), "seconds": seconds}));
+    } else if !global.quiet {
+        eprintln!(
+            "{}: {} layers of {} x {} pixels; sliced in {:.2} s",
+            written.display(),
+            images.layers.len(),
+            images.grid.width,
+            images.grid.height,
+            seconds
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The job name SL1 uses for its folder and image names: the output's file stem, kept to
+/// characters every printer firmware accepts.
+fn job_name(out: &Path) -> String {
+    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("job");
+    let clean: String = stem
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if clean.is_empty() {
+        "job".into()
+    } else {
+        clean
+    }
+}
+
+/// Writes the PNGs into a fresh temporary folder beside `dir`, then renames it into place,
+/// so the folder appears whole or not at all. An existing `dir` must be empty.
+fn write_png_dir(dir: &Path, pngs: &[Vec<u8>]) -> Result<()> {
+    if dir.exists() {
+        let empty = std::fs::read_dir(dir)
+            .with_context(|| format!("{}: cannot read the folder", dir.display()))?
+            .next()
+            .is_none();
+        if !empty {
+            bail!(
+                "{}: the folder exists and is not empty; give a new or empty folder",
+                dir.display()
+            );
+        }
+    }
+    let parent = match dir.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let tmp = tempfile::Builder::new()
+        .prefix(".isoforge-png-")
+        .tempdir_in(parent)
+        .with_context(|| format!("{}: cannot create a folder there", parent.display()))?;
+    for (k, png) in pngs.iter().enumerate() {
+        let path = tmp.path().join(format!("{k:05}.png"));
+        std::fs::write(&path, png).with_context(|| format!("{}: write failed", path.display()))?;
+    }
+    if dir.exists() {
+        std::fs::remove_dir(dir)
+            .with_context(|| format!("{}: cannot replace the empty folder", dir.display()))?;
+    }
+    let kept = tmp.keep();
+    if let Err(e) = std::fs::rename(&kept, dir) {
+        let _ = std::fs::remove_dir_all(&kept);
+        return Err(e)
+            .with_context(|| format!("{}: cannot move the images into place", dir.display()));
+    }
+    Ok(())
 }

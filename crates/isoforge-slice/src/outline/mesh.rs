@@ -1,0 +1,258 @@
+//! Layer outlines from a triangle mesh: each triangle the plane crosses gives one oriented
+//! segment between two of its edges, and segments are chained through the mesh's shared
+//! edges (not by matching coordinates), so a closed mesh always gives closed loops.
+//!
+//! A vertex lying exactly on the plane counts as above it (simulation of simplicity), so
+//! every crossed edge has one end below and one above and no segment degenerates.
+
+use std::collections::HashMap;
+
+use isoforge_mesh::Mesh;
+
+use crate::SliceError;
+use crate::geom::{Contour, simplify_closed};
+use crate::outline::march::chain;
+
+/// Slices a closed, outward-oriented mesh.
+pub struct MeshSlicer<'a> {
+    mesh: &'a Mesh,
+    /// Triangles sorted by their lowest z, with that z and their highest.
+    order: Vec<(f32, f32, u32)>,
+    tolerance: f64,
+}
+
+/// The mesh's bounding box, `(min, max)`, or `None` for no vertices.
+pub fn mesh_bounds(mesh: &Mesh) -> Option<([f64; 3], [f64; 3])> {
+    let first = mesh.vertices.first()?;
+    let mut lo = first.map(f64::from);
+    let mut hi = lo;
+    for v in &mesh.vertices {
+        for k in 0..3 {
+            lo[k] = lo[k].min(v[k] as f64);
+            hi[k] = hi[k].max(v[k] as f64);
+        }
+    }
+    Some((lo, hi))
+}
+
+fn at(mesh: &Mesh, v: u32) -> [f64; 3] {
+    mesh.vertices[v as usize].map(f64::from)
+}
+
+/// Checks that a mesh can be sliced: indices in range, finite coordinates, every edge
+/// shared by exactly two triangles that run it in opposite directions (closed and
+/// consistently oriented), and positive volume (normals pointing out).
+pub fn check_sliceable(mesh: &Mesh) -> Result<(), SliceError> {
+    if mesh.triangles.is_empty() {
+        return Err(SliceError::Mesh("the mesh has no triangles".into()));
+    }
+    let nv = mesh.vertices.len() as u32;
+    if let Some(v) = mesh
+        .vertices
+        .iter()
+        .find(|v| v.iter().any(|c| !c.is_finite()))
+    {
+        return Err(SliceError::Mesh(format!(
+            "a vertex has a coordinate that is not a number: {v:?}"
+        )));
+    }
+    let mut directed: HashMap<(u32, u32), u32> = HashMap::with_capacity(mesh.triangles.len() * 3);
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        if tri.iter().any(|&v| v >= nv) {
+            return Err(SliceError::Mesh(format!(
+                "triangle {t} refers to a vertex beyond the {nv} vertices"
+            )));
+        }
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            if a == b {
+                continue;
+            }
+            if directed.insert((a, b), t as u32).is_some() {
+                let p = at(mesh, a);
+                return Err(SliceError::Mesh(format!(
+                    "the edge at ({:.3}, {:.3}, {:.3}) is used twice in the same direction: \
+                     triangles are wound inconsistently or the mesh is not manifold; repair it \
+                     (e.g. `isoforge check` shows where) before slicing",
+                    p[0], p[1], p[2]
+                )));
+            }
+        }
+    }
+    let open: Vec<&(u32, u32)> = directed
+        .keys()
+        .filter(|&&(a, b)| !directed.contains_key(&(b, a)))
+        .collect();
+    if let Some(&&(a, _)) = open.first() {
+        let p = at(mesh, a);
+        return Err(SliceError::Mesh(format!(
+            "the mesh is open: {} edges have only one triangle (one near ({:.3}, {:.3}, {:.3})); \
+             close the holes before slicing",
+            open.len(),
+            p[0],
+            p[1],
+            p[2]
+        )));
+    }
+    let volume: f64 = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| at(mesh, v));
+            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                + a[2] * (b[0] * c[1] - b[1] * c[0]))
+                / 6.0
+        })
+        .sum();
+    if volume < 0.0 {
+        return Err(SliceError::Mesh(format!(
+            "the mesh is inside out (its volume is {volume:.3} mm³: triangles wind clockwise \
+             seen from outside); flip its normals before slicing"
+        )));
+    }
+    if volume == 0.0 {
+        return Err(SliceError::Mesh("the mesh encloses no volume".into()));
+    }
+    Ok(())
+}
+
+impl<'a> MeshSlicer<'a> {
+    /// Checks the mesh ([`check_sliceable`]) and indexes its triangles by height.
+    pub fn new(mesh: &'a Mesh, tolerance: f64) -> Result<MeshSlicer<'a>, SliceError> {
+        check_sliceable(mesh)?;
+        let mut order: Vec<(f32, f32, u32)> = mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(t, tri)| {
+                let zs = tri.map(|v| mesh.vertices[v as usize][2]);
+                (
+                    zs[0].min(zs[1]).min(zs[2]),
+                    zs[0].max(zs[1]).max(zs[2]),
+                    t as u32,
+                )
+            })
+            .collect();
+        order.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Ok(MeshSlicer {
+            mesh,
+            order,
+            tolerance,
+        })
+    }
+
+    /// The outline at height `z`: outer contours counter-clockwise, holes clockwise.
+    pub fn outline(&self, z: f64) -> Vec<Contour> {
+        let mesh = self.mesh;
+        let zf = z as f32;
+        let end = self.order.partition_point(|t| t.0 <= zf);
+        let above = |v: u32| mesh.vertices[v as usize][2] as f64 >= z;
+        let key = |a: u32, b: u32| if a < b { (a, b) } else { (b, a) };
+        let mut segments = Vec::new();
+        for &(_, zmax, t) in &self.order[..end] {
+            if zmax < zf {
+                continue;
+            }
+            let tri = mesh.triangles[t as usize];
+            let up = tri.map(above);
+            if up[0] == up[1] && up[1] == up[2] {
+                continue;
+            }
+            // Walking the triangle a -> b -> c (counter-clockwise from outside), the edge
+            // that goes from above to below starts the segment (material on its left).
+            let (mut s, mut e) = (None, None);
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                if up[k] && !up[(k + 1) % 3] {
+                    s = Some(key(a, b));
+                } else if !up[k] && up[(k + 1) % 3] {
+                    e = Some(key(a, b));
+                }
+            }
+            if let (Some(s), Some(e)) = (s, e) {
+                segments.push((s, e));
+            }
+        }
+        let point = |(a, b): (u32, u32)| {
+            let (pa, pb) = (at(mesh, a), at(mesh, b));
+            let t = (z - pa[2]) / (pb[2] - pa[2]);
+            [pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1])]
+        };
+        chain(&segments)
+            .into_iter()
+            .filter(|c| c.closed && c.edges.len() >= 3)
+            .map(|c| {
+                let pts: Contour = c.edges.into_iter().map(point).collect();
+                simplify_closed(&pts, self.tolerance)
+            })
+            .filter(|c| c.len() >= 3)
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::contours_area;
+
+    /// A closed octahedron with vertices at ±1 on each axis, outward wound.
+    fn octahedron() -> Mesh {
+        let vertices = vec![
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+        ];
+        let triangles = vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
+        Mesh {
+            vertices,
+            triangles,
+        }
+    }
+
+    #[test]
+    fn octahedron_section_is_a_ccw_square() {
+        let m = octahedron();
+        let s = MeshSlicer::new(&m, 0.0).unwrap();
+        let o = s.outline(0.5);
+        assert_eq!(o.len(), 1);
+        // |x| + |y| <= 0.5: a square of area 2 * 0.5^2.
+        assert!(
+            (contours_area(&o) - 0.5).abs() < 1e-6,
+            "{}",
+            contours_area(&o)
+        );
+        // Through the vertices at z = 0 (on-plane vertices count as above).
+        let o = s.outline(0.0);
+        assert!((contours_area(&o) - 2.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn open_mesh_is_refused() {
+        let mut m = octahedron();
+        m.triangles.pop();
+        let msg = MeshSlicer::new(&m, 0.0).err().unwrap().to_string();
+        assert!(msg.contains("open"), "{msg}");
+    }
+
+    #[test]
+    fn inside_out_mesh_is_refused() {
+        let mut m = octahedron();
+        for t in &mut m.triangles {
+            t.swap(1, 2);
+        }
+        let msg = MeshSlicer::new(&m, 0.0).err().unwrap().to_string();
+        assert!(msg.contains("inside out"), "{msg}");
+    }
+}

@@ -1,0 +1,144 @@
+//! What is sliced: a field over a region, or a mesh. Both give the same thing per layer, an
+//! oriented outline, and the model's height range.
+
+use isoforge_field::{Bounds, Shape};
+use isoforge_mesh::Mesh;
+
+use crate::SliceError;
+use crate::geom::{Contour, bbox};
+use crate::outline::mesh::mesh_bounds;
+use crate::outline::{FieldSlicer, MeshSlicer};
+
+/// A model to slice.
+#[derive(Clone, Copy)]
+pub enum Source<'a> {
+    /// A field, evaluated inside its region (outside counts as outside).
+    Field(&'a Shape, Bounds),
+    /// A closed, outward-oriented triangle mesh.
+    Mesh(&'a Mesh),
+}
+
+impl<'a> Source<'a> {
+    /// A field over a region.
+    pub fn field(shape: &'a Shape, bounds: Bounds) -> Self {
+        Source::Field(shape, bounds)
+    }
+    /// A mesh.
+    pub fn mesh(mesh: &'a Mesh) -> Self {
+        Source::Mesh(mesh)
+    }
+
+    /// Prepares outlines with finest cells of `cell` mm (fields only) and simplification
+    /// within `tolerance` mm. Checks a mesh and finds the model's height range.
+    pub fn prepare(&self, cell: f64, tolerance: f64) -> Result<Sliceable<'a>, SliceError> {
+        match *self {
+            Source::Field(shape, bounds) => {
+                let slicer = FieldSlicer::new(shape, bounds, cell, tolerance);
+                let (z0, z1) = slicer.z_extent(cell).ok_or_else(|| {
+                    SliceError::Empty(format!(
+                        "the model has no material inside its bounds {:?} .. {:?}; check the \
+                         model (negative is inside) or pass --bounds",
+                        bounds.min, bounds.max
+                    ))
+                })?;
+                Ok(Sliceable {
+                    inner: Inner::Field(slicer),
+                    z_range: (z0, z1),
+                })
+            }
+            Source::Mesh(mesh) => {
+                let slicer = MeshSlicer::new(mesh, tolerance)?;
+                let (lo, hi) = mesh_bounds(mesh)
+                    .ok_or_else(|| SliceError::Empty("the mesh has no vertices".into()))?;
+                Ok(Sliceable {
+                    inner: Inner::Mesh(slicer),
+                    z_range: (lo[2], hi[2]),
+                })
+            }
+        }
+    }
+}
+
+enum Inner<'a> {
+    Field(FieldSlicer),
+    Mesh(MeshSlicer<'a>),
+}
+
+/// A model ready to be cut into layers.
+pub struct Sliceable<'a> {
+    inner: Inner<'a>,
+    /// The lowest and highest z with material, model coordinates.
+    pub z_range: (f64, f64),
+}
+
+impl Sliceable<'_> {
+    /// The outline at model height `z` for a layer spanning `slab`.
+    pub fn outline(&self, z: f64, slab: (f64, f64)) -> Vec<Contour> {
+        match &self.inner {
+            Inner::Field(f) => f.outline(z, slab),
+            Inner::Mesh(m) => m.outline(z),
+        }
+    }
+
+    /// The field slicer, when the model is a field (raster output evaluates it per pixel).
+    pub fn field(&self) -> Option<&FieldSlicer> {
+        match &self.inner {
+            Inner::Field(f) => Some(f),
+            Inner::Mesh(_) => None,
+        }
+    }
+}
+
+/// One layer: its top in print coordinates (the bed at 0), its thickness, and the model
+/// height its outline is taken at (the middle of the layer).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Layer {
+    /// Top of the layer above the bed, mm.
+    pub top: f64,
+    /// Thickness, mm.
+    pub height: f64,
+    /// Model z of the section (mid-layer).
+    pub model_z: f64,
+}
+
+/// The layers for a model of height range `z_range`: the first `first` mm thick, then
+/// `height` mm each, until the model's top is covered.
+pub fn layer_stack(z_range: (f64, f64), first: f64, height: f64) -> Vec<Layer> {
+    let total = z_range.1 - z_range.0;
+    let mut layers = Vec::new();
+    let mut bottom = 0.0;
+    let mut h = first;
+    // A tiny slack so a model that is a whole number of layers tall gets no empty extra one.
+    while bottom < total - 1e-6 && layers.len() < 1_000_000 {
+        let top = bottom + h;
+        layers.push(Layer {
+            top,
+            height: h,
+            model_z: z_range.0 + (bottom + top.min(total)) * 0.5,
+        });
+        bottom = top;
+        h = height;
+    }
+    layers
+}
+
+/// The bounding box of a set of layer outlines, `(min, max)`.
+pub fn outlines_bbox(layers: &[Vec<Contour>]) -> Option<([f64; 2], [f64; 2])> {
+    bbox(layers.iter().flatten().flatten())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layers_cover_the_height() {
+        let l = layer_stack((-10.0, 10.0), 0.3, 0.2);
+        assert_eq!(l[0].top, 0.3);
+        assert!((l.last().unwrap().top - 20.1).abs() < 1e-9);
+        assert_eq!(l.len(), 1 + 99);
+        assert!((l[0].model_z - (-10.0 + 0.15)).abs() < 1e-12);
+        let l = layer_stack((0.0, 1.0), 0.2, 0.2);
+        assert_eq!(l.len(), 5);
+    }
+}
