@@ -1,0 +1,354 @@
+//! End-to-end tests of `isoforge slice`: a model script and a mesh to G-code (judged by the
+//! slicer's own G-code checker), SL1, SVX and PNG folders (judged by their entries and keys),
+//! and bad input (clear error, no output left behind).
+
+use std::io::Read;
+use std::path::Path;
+
+use isoforge_slice::check;
+use isoforge_tests::{fixtures, isoforge};
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+fn torus() -> std::path::PathBuf {
+    fixtures().join("slice/torus.rhai")
+}
+
+fn generic() -> std::path::PathBuf {
+    fixtures().join("printers/generic_marlin_220.toml")
+}
+
+fn sl1_profile() -> std::path::PathBuf {
+    fixtures().join("printers/prusa_sl1.toml")
+}
+
+fn zip_names(path: &Path) -> Vec<String> {
+    let file = std::fs::File::open(path).expect("archive written");
+    let mut archive = zip::ZipArchive::new(file).expect("a zip archive");
+    (0..archive.len())
+        .map(|i| {
+            archive
+                .by_index(i)
+                .expect("entry")
+                .name()
+                .expect("entry name")
+                .to_string()
+        })
+        .collect()
+}
+
+fn zip_text(path: &Path, name: &str) -> String {
+    let file = std::fs::File::open(path).expect("archive written");
+    let mut archive = zip::ZipArchive::new(file).expect("a zip archive");
+    let mut text = String::new();
+    archive
+        .by_name(name)
+        .expect("entry present")
+        .read_to_string(&mut text)
+        .expect("utf-8 entry");
+    text
+}
+
+#[test]
+fn script_to_gcode_is_checked_layer_by_layer() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("torus.gcode");
+    let run = isoforge(&[
+        "slice",
+        s(&torus()),
+        "--profile",
+        s(&generic()),
+        "--set",
+        "layer_height=0.3",
+        "--set",
+        "first_layer_height=0.3",
+        "-o",
+        s(&out),
+        "--json",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&run.stdout).expect("one JSON object");
+    for key in [
+        "layers",
+        "seconds",
+        "filament_mm",
+        "estimated_print_seconds",
+    ] {
+        assert!(json.get(key).is_some(), "--json lacks {key}");
+    }
+    // The torus is 10 mm tall: 10 / 0.3 rounds to 33 or 34 layers.
+    let layers = json["layers"].as_u64().unwrap();
+    assert!((33..=34).contains(&layers), "{layers} layers");
+
+    let text = std::fs::read_to_string(&out).unwrap();
+    let report = check::parse(&text).expect("the checker reads our G-code");
+    assert_eq!(report.layers.len() as u64, layers);
+    // Z heights climb by one layer height.
+    let zs: Vec<f64> = report.layers.iter().filter_map(|(_, z)| *z).collect();
+    assert_eq!(zs.len() as u64, layers);
+    for pair in zs.windows(2) {
+        assert!(((pair[1] - pair[0]) - 0.3).abs() < 1e-6, "{pair:?}");
+    }
+    // Heated before the first extrusion, and nothing leaves the 220 x 220 bed.
+    assert!(report.nozzle_before_first_extrusion.unwrap_or(0.0) > 150.0);
+    assert!(report.waited_for_nozzle);
+    assert!(report.min[0] >= 0.0 && report.min[1] >= 0.0);
+    assert!(report.max[0] <= 220.0 && report.max[1] <= 220.0);
+    assert!(report.filament_mm > 100.0);
+}
+
+#[test]
+fn mesh_input_slices_like_the_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let stl = dir.path().join("torus.stl");
+    let run = isoforge(&[
+        "mesh",
+        s(&torus()),
+        "--depth",
+        "7",
+        "-o",
+        s(&stl),
+        "--quiet",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let mut layers = Vec::new();
+    for input in [torus(), stl.clone()] {
+        let out = dir.path().join("out.gcode");
+        let run = isoforge(&[
+            "slice",
+            s(&input),
+            "--profile",
+            s(&generic()),
+            "-o",
+            s(&out),
+            "--json",
+        ]);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+        layers.push(json["layers"].as_u64().unwrap());
+        let report = check::parse(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        assert!(!report.extrusions.is_empty());
+    }
+    // The mesh's extent differs from the field's by under a cell, so at most one layer.
+    assert!(
+        layers[0].abs_diff(layers[1]) <= 1,
+        "model and mesh give {layers:?} layers"
+    );
+}
+
+#[test]
+fn sl1_archive_has_the_entries_and_keys() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("torus.sl1");
+    let run = isoforge(&[
+        "slice",
+        s(&torus()),
+        "--profile",
+        s(&sl1_profile()),
+        "--set",
+        "layer_height=0.5",
+        "--sl1",
+        s(&out),
+        "--json",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let layers = json["layers"].as_u64().unwrap() as usize;
+    assert!(layers >= 20, "{layers} layers");
+    let names = zip_names(&out);
+    assert!(names.iter().any(|n| n == "config.ini"));
+    assert!(names.iter().any(|n| n == "prusaslicer.ini"));
+    assert!(
+        names
+            .iter()
+            .any(|n| n.starts_with("thumbnail/") && n.ends_with(".png"))
+    );
+    let config = zip_text(&out, "config.ini");
+    let key = |k: &str| {
+        config
+            .lines()
+            .find_map(|l| l.strip_prefix(&format!("{k} = ")))
+            .unwrap_or_else(|| panic!("config.ini lacks {k}"))
+            .to_string()
+    };
+    for k in [
+        "action",
+        "expTime",
+        "expTimeFirst",
+        "layerHeight",
+        "numFade",
+        "numFast",
+        "numSlow",
+        "printTime",
+        "usedMaterial",
+        "printerModel",
+    ] {
+        key(k);
+    }
+    let job = key("jobDir");
+    let pngs: Vec<_> = names
+        .iter()
+        .filter(|n| n.starts_with(&job) && n.ends_with(".png"))
+        .collect();
+    assert_eq!(pngs.len(), layers);
+    assert!(names.contains(&format!("{job}00000.png")));
+}
+
+#[test]
+fn svx_archive_has_a_manifest_and_slices() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("torus.svx");
+    let run = isoforge(&[
+        "slice",
+        s(&torus()),
+        "--profile",
+        s(&sl1_profile()),
+        "--set",
+        "layer_height=0.5",
+        "--svx",
+        s(&out),
+        "--json",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let layers = json["layers"].as_u64().unwrap() as usize;
+    let names = zip_names(&out);
+    let manifest = zip_text(&out, "manifest.xml");
+    for key in [
+        "gridSizeX",
+        "gridSizeY",
+        "gridSizeZ",
+        "voxelSize",
+        "subvoxelBits",
+        "slicesOrientation",
+        "DENSITY",
+    ] {
+        assert!(manifest.contains(key), "manifest lacks {key}");
+    }
+    let slices = names
+        .iter()
+        .filter(|n| n.starts_with("density/slice"))
+        .count();
+    assert_eq!(slices, layers);
+    assert!(names.iter().any(|n| n == "density/slice0000.png"));
+}
+
+#[test]
+fn png_dir_holds_one_png_per_layer() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("layers");
+    let run = isoforge(&[
+        "slice",
+        s(&torus()),
+        "--profile",
+        s(&sl1_profile()),
+        "--set",
+        "layer_height=1",
+        "--png-dir",
+        s(&out),
+        "--json",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let layers = json["layers"].as_u64().unwrap() as usize;
+    let mut names: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(names.len(), layers);
+    assert_eq!(names[0], "00000.png");
+    let png = std::fs::read(out.join("00000.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+}
+
+#[test]
+fn bad_input_fails_cleanly_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.gcode");
+    let bad_profile = dir.path().join("bad.toml");
+    let generic_text = std::fs::read_to_string(generic()).unwrap();
+    let negative: String = generic_text
+        .lines()
+        .map(|l| {
+            if l.trim_start().starts_with("layer_height") {
+                "layer_height = -0.2".to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(&bad_profile, negative).unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        // A negative value in a profile names the key.
+        (
+            vec!["--profile".into(), s(&bad_profile).into()],
+            "layer_height",
+        ),
+        // A negative override names the key.
+        (vec!["--set".into(), "line_width=-1".into()], "line_width"),
+        // An unknown key is refused, not ignored.
+        (vec!["--set".into(), "no_such_key=1".into()], "no_such_key"),
+        // A model larger than the bed.
+        (
+            vec![
+                "--param".into(),
+                "R=100".into(),
+                "--param".into(),
+                "r=12".into(),
+            ],
+            "bed",
+        ),
+    ];
+    for (extra, word) in cases {
+        let mut args = vec!["slice".to_string(), s(&torus()).to_string()];
+        args.extend(extra.iter().cloned());
+        args.extend(["-o".to_string(), s(&out).to_string()]);
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        let run = isoforge(&refs);
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{extra:?}: {err}");
+        assert!(
+            err.contains(word),
+            "{extra:?}: message {err:?} lacks {word:?}"
+        );
+        assert!(!out.exists(), "{extra:?} left a file");
+    }
+    // An open mesh: a clear message, not a G-code file of garbage.
+    let open = fixtures().join("meshes/open_box.stl");
+    let run = isoforge(&["slice", s(&open), "-o", s(&out)]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    if run.status.success() {
+        assert!(err.contains("open") || err.contains("warning"), "{err}");
+    } else {
+        assert!(err.contains("open"), "{err}");
+        assert!(!out.exists());
+    }
+}
