@@ -51,12 +51,25 @@ fn zip_text(path: &Path, name: &str) -> String {
     text
 }
 
+/// Runs `isoforge slice ... --json`, asserts it succeeded, and returns its JSON figures.
+fn slice_json(args: &[&str]) -> serde_json::Value {
+    let mut all = vec!["slice"];
+    all.extend_from_slice(args);
+    all.push("--json");
+    let run = isoforge(&all);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    serde_json::from_slice(&run.stdout).expect("one JSON object on stdout")
+}
+
 #[test]
 fn script_to_gcode_is_checked_layer_by_layer() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("torus.gcode");
-    let run = isoforge(&[
-        "slice",
+    let json = slice_json(&[
         s(&torus()),
         "--profile",
         s(&generic()),
@@ -66,14 +79,7 @@ fn script_to_gcode_is_checked_layer_by_layer() {
         "first_layer_height=0.3",
         "-o",
         s(&out),
-        "--json",
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let json: serde_json::Value = serde_json::from_slice(&run.stdout).expect("one JSON object");
     for key in [
         "layers",
         "seconds",
@@ -124,21 +130,7 @@ fn mesh_input_slices_like_the_model() {
     let mut layers = Vec::new();
     for input in [torus(), stl.clone()] {
         let out = dir.path().join("out.gcode");
-        let run = isoforge(&[
-            "slice",
-            s(&input),
-            "--profile",
-            s(&generic()),
-            "-o",
-            s(&out),
-            "--json",
-        ]);
-        assert!(
-            run.status.success(),
-            "{}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+        let json = slice_json(&[s(&input), "--profile", s(&generic()), "-o", s(&out)]);
         layers.push(json["layers"].as_u64().unwrap());
         let report = check::parse(&std::fs::read_to_string(&out).unwrap()).unwrap();
         assert!(!report.extrusions.is_empty());
@@ -154,8 +146,7 @@ fn mesh_input_slices_like_the_model() {
 fn sl1_archive_has_the_entries_and_keys() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("torus.sl1");
-    let run = isoforge(&[
-        "slice",
+    let json = slice_json(&[
         s(&torus()),
         "--profile",
         s(&sl1_profile()),
@@ -163,14 +154,7 @@ fn sl1_archive_has_the_entries_and_keys() {
         "layer_height=0.5",
         "--sl1",
         s(&out),
-        "--json",
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
     let layers = json["layers"].as_u64().unwrap() as usize;
     assert!(layers >= 20, "{layers} layers");
     let names = zip_names(&out);
@@ -216,8 +200,7 @@ fn sl1_archive_has_the_entries_and_keys() {
 fn svx_archive_has_a_manifest_and_slices() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("torus.svx");
-    let run = isoforge(&[
-        "slice",
+    let json = slice_json(&[
         s(&torus()),
         "--profile",
         s(&sl1_profile()),
@@ -225,14 +208,7 @@ fn svx_archive_has_a_manifest_and_slices() {
         "layer_height=0.5",
         "--svx",
         s(&out),
-        "--json",
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
     let layers = json["layers"].as_u64().unwrap() as usize;
     let names = zip_names(&out);
     let manifest = zip_text(&out, "manifest.xml");
@@ -259,8 +235,7 @@ fn svx_archive_has_a_manifest_and_slices() {
 fn png_dir_holds_one_png_per_layer() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("layers");
-    let run = isoforge(&[
-        "slice",
+    let json = slice_json(&[
         s(&torus()),
         "--profile",
         s(&sl1_profile()),
@@ -268,14 +243,7 @@ fn png_dir_holds_one_png_per_layer() {
         "layer_height=1",
         "--png-dir",
         s(&out),
-        "--json",
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let json: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
     let layers = json["layers"].as_u64().unwrap() as usize;
     let mut names: Vec<_> = std::fs::read_dir(&out)
         .unwrap()
