@@ -57,16 +57,8 @@ impl Emitter<'_> {
         }
         let retract = self.s.retract_length > 0.0
             && (d > self.s.retract_min_travel || crosses(self.pos, to, barriers));
-        if retract && !self.retracted {
-            self.e -= self.s.retract_length;
-            let _ = writeln!(
-                self.out,
-                "G1 E{:.5} F{:.0}",
-                self.e,
-                self.s.retract_speed * 60.0
-            );
-            self.seconds += self.s.retract_length / self.s.retract_speed;
-            self.retracted = true;
+        if retract {
+            self.set_retracted(true);
         }
         let _ = writeln!(
             self.out,
@@ -80,17 +72,24 @@ impl Emitter<'_> {
     }
 
     fn unretract(&mut self) {
-        if self.retracted {
-            self.e += self.s.retract_length;
-            let _ = writeln!(
-                self.out,
-                "G1 E{:.5} F{:.0}",
-                self.e,
-                self.s.retract_speed * 60.0
-            );
-            self.seconds += self.s.retract_length / self.s.retract_speed;
-            self.retracted = false;
+        self.set_retracted(false);
+    }
+
+    /// Pulls the filament back (or pushes it again) by the retract length, once.
+    fn set_retracted(&mut self, retracted: bool) {
+        if self.retracted == retracted {
+            return;
         }
+        let length = self.s.retract_length;
+        self.e += if retracted { -length } else { length };
+        let _ = writeln!(
+            self.out,
+            "G1 E{:.5} F{:.0}",
+            self.e,
+            self.s.retract_speed * 60.0
+        );
+        self.seconds += length / self.s.retract_speed;
+        self.retracted = retracted;
     }
 
     fn extrude(&mut self, path: &Extrusion, h: f64, speed: f64, barriers: &[Contour]) {
