@@ -10,7 +10,7 @@
 //! holds it.
 
 use super::octree::{Class, Grid};
-use super::sampler::{Clip, Sampler};
+use super::sampler::Sampler;
 
 /// Bisection rounds on each crossing. After 8 halvings the bracket is 1/256 of a cell;
 /// the final linear interpolation on the bracket makes smooth surfaces far finer.
@@ -54,7 +54,6 @@ pub fn own_signs<S: Sampler>(
     sampler: &S,
     ev: &mut S::Evals,
     local: &S::Local,
-    clip: &Clip,
     grid: &Grid,
     coords: [i64; 3],
     scratch: &mut Scratch,
@@ -81,9 +80,8 @@ pub fn own_signs<S: Sampler>(
     sc.out.resize(n, 0.0);
     sampler.batch(ev, local, &sc.xs, &sc.ys, &sc.zs, &mut sc.out);
     bits.fill(0);
-    for c in 0..n {
-        let p = [sc.xs[c], sc.ys[c], sc.zs[c]];
-        if Clip::combine(sc.out[c], clip.dist(p)) < 0.0 {
+    for (c, &f) in sc.out.iter().enumerate() {
+        if f < 0.0 {
             bits[c / 64] |= 1 << (c % 64);
         }
     }
@@ -183,7 +181,6 @@ pub fn crossings<S: Sampler>(
     sampler: &S,
     ev: &mut S::Evals,
     local: &S::Local,
-    clip: &Clip,
     grid: &Grid,
     coords: [i64; 3],
     signs: &[u8],
@@ -250,8 +247,7 @@ pub fn crossings<S: Sampler>(
         sc.out.resize(m, 0.0);
         sampler.batch(ev, local, &sc.xs, &sc.ys, &sc.zs, &mut sc.out);
         for (e, edge) in edges.iter().enumerate() {
-            let p = [sc.xs[e], sc.ys[e], sc.zs[e]];
-            let f = Clip::combine(sc.out[e], clip.dist(p));
+            let f = sc.out[e];
             let mid = 0.5 * (sc.lo[e] + sc.hi[e]);
             let start_inside = signs[edge.corner as usize] == 1;
             if (f < 0.0) == start_inside {
@@ -287,8 +283,7 @@ pub fn crossings<S: Sampler>(
         sc.out.resize(ends.len(), 0.0);
         sampler.batch(ev, local, &sc.xs, &sc.ys, &sc.zs, &mut sc.out);
         for (k, &(e, at_lo)) in ends.iter().enumerate() {
-            let p = [sc.xs[k], sc.ys[k], sc.zs[k]];
-            let f = Clip::combine(sc.out[k], clip.dist(p));
+            let f = sc.out[k];
             if at_lo { sc.flo[e] = f } else { sc.fhi[e] = f }
         }
     }
@@ -314,7 +309,7 @@ pub fn crossings<S: Sampler>(
         } else {
             -1.0
         };
-        let normal = normal_at(sampler, ev, local, clip, grid.cell, pos, outward, sc);
+        let normal = normal_at(sampler, ev, local, grid.cell, pos, outward, sc);
         out.push(Crossing { pos, normal });
     }
 }
@@ -332,17 +327,14 @@ fn normal_at<S: Sampler>(
     sampler: &S,
     ev: &mut S::Evals,
     local: &S::Local,
-    clip: &Clip,
     cell: f64,
     p: [f64; 3],
     outward: [f64; 3],
     sc: &mut Scratch,
 ) -> [f64; 3] {
-    let d = clip.dist(p);
+    // Where the region's face caps the model, this is the face's normal (see
+    // `isoforge_field::clip_grad`).
     let g = sampler.grad(ev, local, p);
-    if !g[0].is_nan() && d >= g[0] {
-        return clip.normal(p);
-    }
     if let Some(n) = unit([g[1], g[2], g[3]]) {
         return n;
     }
