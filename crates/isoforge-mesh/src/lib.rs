@@ -1,6 +1,7 @@
 //! Meshing for isoforge: an interval-pruned octree over a field, dual contouring into a
 //! closed, manifold, consistently oriented triangle mesh, a mesh checker, mesh readers and
-//! writers (STL, OBJ, PLY, 3MF), and a shaded preview renderer.
+//! writers (STL, OBJ, PLY, 3MF). (Preview pictures are `isoforge-render`'s, which needs
+//! no mesh.)
 //!
 //! The main call, field to checked mesh:
 //! ```no_run
@@ -17,11 +18,9 @@ pub mod check;
 pub mod dc;
 pub mod io;
 pub mod mesh;
-pub mod render;
 pub mod samples;
 
 pub use check::{MeshReport, check};
 pub use dc::{MeshError, MeshSettings, mesh_shape, try_mesh_shape};
 pub use io::{MeshFormat, MeshIoError, read_mesh, write_mesh};
 pub use mesh::Mesh;
-pub use render::{Image, RenderSettings, View, render};
