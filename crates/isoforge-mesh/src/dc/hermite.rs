@@ -9,10 +9,12 @@
 //! touches a pruned block), else the sample of its owner, the block whose half-open range
 //! holds it.
 
+use glam::DVec3;
+
 use super::octree::{Class, Grid};
 use super::sampler::Sampler;
 
-/// Bisection rounds on each crossing. After 8 halvings the bracket is 1/256 of a cell;
+/// Bisection rounds on each crossing. After 6 halvings the bracket is 1/64 of a cell;
 /// the final linear interpolation on the bracket makes smooth surfaces far finer.
 const BISECTION_ROUNDS: usize = 6;
 
@@ -20,9 +22,9 @@ const BISECTION_ROUNDS: usize = 6;
 #[derive(Clone, Copy, Debug)]
 pub struct Crossing {
     /// Where F changes sign.
-    pub pos: [f64; 3],
+    pub pos: DVec3,
     /// Unit outward normal.
-    pub normal: [f64; 3],
+    pub normal: DVec3,
 }
 
 /// Reusable per-thread buffers.
@@ -309,14 +311,18 @@ pub fn crossings<S: Sampler>(
         } else {
             -1.0
         };
-        let normal = normal_at(sampler, ev, local, grid.cell, pos, outward, sc);
-        out.push(Crossing { pos, normal });
+        let normal = normal_at(sampler, ev, local, grid.cell, pos, outward.into(), sc);
+        out.push(Crossing {
+            pos: pos.into(),
+            normal,
+        });
     }
 }
 
-fn unit(v: [f64; 3]) -> Option<[f64; 3]> {
-    let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    (len.is_finite() && len > 1e-300).then(|| v.map(|c| c / len))
+/// `v / |v|`, unless `|v|` is infinite, NaN or too small to divide by.
+fn unit(v: DVec3) -> Option<DVec3> {
+    let len = v.length();
+    (len.is_finite() && len > 1e-300).then(|| v / len)
 }
 
 /// The outward normal: the gradient of F; where that is NaN, infinite or zero, a central
@@ -329,13 +335,13 @@ fn normal_at<S: Sampler>(
     local: &S::Local,
     cell: f64,
     p: [f64; 3],
-    outward: [f64; 3],
+    outward: DVec3,
     sc: &mut Scratch,
-) -> [f64; 3] {
+) -> DVec3 {
     // Where the region's face caps the model, this is the face's normal (see
     // `isoforge_field::clip_grad`).
     let g = sampler.grad(ev, local, p);
-    if let Some(n) = unit([g[1], g[2], g[3]]) {
+    if let Some(n) = unit(DVec3::new(g[1], g[2], g[3])) {
         return n;
     }
     let h = cell * 1e-3;
@@ -354,6 +360,6 @@ fn normal_at<S: Sampler>(
     sc.out.clear();
     sc.out.resize(6, 0.0);
     sampler.batch(ev, local, &sc.xs, &sc.ys, &sc.zs, &mut sc.out);
-    let fd = [0, 1, 2].map(|a| sc.out[2 * a] - sc.out[2 * a + 1]);
+    let fd = DVec3::from([0, 1, 2].map(|a| sc.out[2 * a] - sc.out[2 * a + 1]));
     unit(fd).unwrap_or(outward)
 }

@@ -94,16 +94,7 @@ pub fn check_sliceable(mesh: &Mesh) -> Result<(), SliceError> {
             p[2]
         )));
     }
-    let volume: f64 = mesh
-        .triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|v| at(mesh, v));
-            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                + a[2] * (b[0] * c[1] - b[1] * c[0]))
-                / 6.0
-        })
-        .sum();
+    let volume = mesh.signed_volume();
     if volume < 0.0 {
         return Err(SliceError::Mesh(format!(
             "the mesh is inside out (its volume is {volume:.3} mm³: triangles wind clockwise \
