@@ -1,6 +1,6 @@
 //! The indexed triangle mesh every stage shares.
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 
 /// An indexed triangle mesh: shared vertices, triangles wound counter-clockwise seen from
 /// outside (so normals point out).
@@ -16,22 +16,17 @@ impl Mesh {
     /// The axis-aligned box of all vertices as `[min, max]`, or `None` for a mesh without
     /// vertices.
     pub fn bounds(&self) -> Option<[[f32; 3]; 2]> {
-        let first = *self.vertices.first()?;
-        let mut lo = first;
-        let mut hi = first;
-        for v in &self.vertices {
-            for i in 0..3 {
-                lo[i] = lo[i].min(v[i]);
-                hi[i] = hi[i].max(v[i]);
-            }
-        }
-        Some([lo, hi])
+        let first = Vec3::from(*self.vertices.first()?);
+        let (lo, hi) = self.vertices.iter().fold((first, first), |(lo, hi), &v| {
+            (lo.min(Vec3::from(v)), hi.max(Vec3::from(v)))
+        });
+        Some([lo.to_array(), hi.to_array()])
     }
 
     /// The three corners of a triangle, in f64. Indices must be in range (see
     /// [`Mesh::has_valid_indices`]).
     pub fn corners(&self, t: [u32; 3]) -> [DVec3; 3] {
-        t.map(|i| glam::Vec3::from(self.vertices[i as usize]).as_dvec3())
+        t.map(|i| Vec3::from(self.vertices[i as usize]).as_dvec3())
     }
 
     /// True when every triangle index names a vertex.
@@ -50,7 +45,7 @@ impl Mesh {
         let Some([lo, hi]) = self.bounds() else {
             return 0.0;
         };
-        let c = (glam::Vec3::from(lo).as_dvec3() + glam::Vec3::from(hi).as_dvec3()) * 0.5;
+        let c = (Vec3::from(lo).as_dvec3() + Vec3::from(hi).as_dvec3()) * 0.5;
         let mut six_v = 0.0;
         for &t in &self.triangles {
             let [a, b, d] = self.corners(t).map(|p| p - c);

@@ -23,16 +23,8 @@ pub struct MeshSlicer<'a> {
 
 /// The mesh's bounding box, `(min, max)`, or `None` for no vertices.
 pub fn mesh_bounds(mesh: &Mesh) -> Option<([f64; 3], [f64; 3])> {
-    let first = mesh.vertices.first()?;
-    let mut lo = first.map(f64::from);
-    let mut hi = lo;
-    for v in &mesh.vertices {
-        for k in 0..3 {
-            lo[k] = lo[k].min(v[k] as f64);
-            hi[k] = hi[k].max(v[k] as f64);
-        }
-    }
-    Some((lo, hi))
+    let [lo, hi] = mesh.bounds()?;
+    Some((lo.map(f64::from), hi.map(f64::from)))
 }
 
 fn at(mesh: &Mesh, v: u32) -> [f64; 3] {
