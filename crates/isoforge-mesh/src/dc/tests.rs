@@ -1,13 +1,12 @@
 //! Mesher tests on plain closures (no tape needed): every corner sign pattern of a cell and
 //! of a pair of cells, across block boundaries, with and without NaN; shapes that break
-//! meshers. Each mesh is checked by an independent edge/vertex-link checker.
-
-use std::collections::HashMap;
+//! meshers. Each mesh is checked by the crate's checker.
 
 use isoforge_field::{Bounds, Grad, Interval, clip_grad, clip_interval, clip_value};
 
 use super::sampler::Sampler;
 use super::{MeshSettings, mesh_sampler_blocks, octree};
+use crate::check::check;
 use crate::mesh::Mesh;
 
 type IntervalFn = Box<dyn Fn([Interval; 3]) -> Interval + Sync>;
@@ -93,27 +92,19 @@ impl<F: Fn([f64; 3]) -> f64 + Sync> Sampler for FnSampler<F> {
     }
 }
 
-/// Closed: every directed edge once, with its reverse once. Manifold: every vertex's
-/// triangles form one cycle. Oriented: follows from the first. Returns the volume.
+/// Checks the mesh with the crate's checker (closed, manifold, oriented; an empty mesh
+/// passes, callers say when they expect one) and that vertex positions are distinct.
+/// Returns the volume.
 pub fn assert_closed_manifold(mesh: &Mesh, what: &str) -> f64 {
-    let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
-    for t in &mesh.triangles {
-        assert!(
-            t[0] != t[1] && t[1] != t[2] && t[0] != t[2],
-            "{what}: triangle repeats a vertex {t:?}"
-        );
-        for k in 0..3 {
-            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
-        }
+    if mesh.triangles.is_empty() {
+        return 0.0;
     }
-    for (&(a, b), &n) in &directed {
-        assert_eq!(n, 1, "{what}: directed edge {a}->{b} used {n} times");
-        assert_eq!(
-            directed.get(&(b, a)).copied(),
-            Some(1),
-            "{what}: edge {a}-{b} has no opposite"
-        );
-    }
+    let report = check(mesh);
+    assert!(
+        report.is_closed_manifold(),
+        "{what}: {:?}",
+        report.problems()
+    );
     // STL has no shared vertices: readers weld by position, so positions must be distinct.
     let mut seen = std::collections::HashSet::new();
     for v in &mesh.vertices {
@@ -122,46 +113,7 @@ pub fn assert_closed_manifold(mesh: &Mesh, what: &str) -> f64 {
             "{what}: two vertices at {v:?}"
         );
     }
-    // Vertex links: the "next" map around each vertex must be a single cycle.
-    let mut around: HashMap<u32, HashMap<u32, u32>> = HashMap::new();
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (v, a, b) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            around.entry(v).or_default().insert(a, b);
-        }
-    }
-    for (v, next) in &around {
-        let Some((&start, _)) = next.iter().next() else {
-            continue;
-        };
-        let mut cur = start;
-        let mut steps = 0;
-        loop {
-            cur = next[&cur];
-            steps += 1;
-            if cur == start || steps > next.len() {
-                break;
-            }
-        }
-        assert_eq!(
-            steps,
-            next.len(),
-            "{what}: vertex {v} link is not one cycle"
-        );
-    }
-    volume(mesh)
-}
-
-pub fn volume(mesh: &Mesh) -> f64 {
-    mesh.triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| mesh.vertices[i as usize].map(f64::from));
-            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                + a[2] * (b[0] * c[1] - b[1] * c[0]))
-                / 6.0
-        })
-        .sum()
+    report.volume
 }
 
 fn settings(min: f64, max: f64, depth: u8) -> MeshSettings {
