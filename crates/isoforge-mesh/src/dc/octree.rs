@@ -167,7 +167,7 @@ impl<S: Sampler> BuildCtx<'_, '_, S> {
         let mut guard = self.pool.take();
         // The clipped field: no point inside when its lower end is >= 0 (inside is F < 0).
         let f = self.sampler.interval(guard.get(), local, b);
-        if !(f.inf() < 0.0) {
+        if f.inf() >= 0.0 {
             return Built::Empty;
         }
         if f.sup() < 0.0 {
