@@ -1,4 +1,4 @@
-//! Mesh files and the checker on a million triangles, and preview renders:
+//! Mesh files and the checker on a million triangles:
 //! `cargo bench -p isoforge-benches --bench meshio`.
 //!
 //! The mesh is a UV sphere of 1000 slices by 501 stacks (1,000,000 triangles, 499,002
@@ -53,16 +53,4 @@ fn write_1m(bencher: Bencher, format: MeshFormat) {
 fn read_1m(bencher: Bencher, format: MeshFormat) {
     let bytes = encoded(format);
     bencher.bench(|| decode(divan::black_box(&bytes), format).expect("valid"));
-}
-
-/// The README's kind of picture: a classic model at 400 x 300, iso view.
-#[divan::bench(args = ["heart", "spaceship", "sinus_sphere"], sample_count = 3)]
-fn render_400x300(bencher: Bencher, model: &str) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../fixtures/classic")
-        .join(format!("{model}.rhai"));
-    let loaded = isoforge_script::load_file(&path, &[]).expect("fixture loads");
-    let bounds = loaded.bounds.expect("fixture declares bounds");
-    let settings = isoforge_mesh::RenderSettings::new(400, 300);
-    bencher.bench(|| isoforge_mesh::render(&loaded.shape, &bounds, &settings));
 }

@@ -6,7 +6,8 @@
 use std::path::PathBuf;
 
 use divan::black_box;
-use isoforge_script::{find_bounds, load_file};
+use isoforge_field::find_bounds;
+use isoforge_script::load_file;
 
 fn main() {
     divan::main();

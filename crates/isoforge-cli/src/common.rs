@@ -60,14 +60,26 @@ impl ModelArgs {
             Some(text) => parse_bounds(text)?,
             None => match model.bounds {
                 Some(b) => b,
-                None => isoforge_script::find_bounds(&model.shape)
+                None => isoforge_field::find_bounds(&model.shape)
+                    .map_err(region_hint)
                     .with_context(|| format!("{}: no region", self.model.display()))?,
             },
         };
         // A region with nothing in it would give an empty mesh or blank layers: say so.
-        isoforge_script::ensure_not_empty(&model.shape, &bounds)
+        isoforge_field::ensure_not_empty(&model.shape, &bounds)
             .with_context(|| self.model.display().to_string())?;
         Ok(LoadedModel { model, bounds })
+    }
+}
+
+/// The region error, with how to give a region where none could be found.
+fn region_hint(e: isoforge_field::RegionError) -> anyhow::Error {
+    match e {
+        isoforge_field::RegionError::Unbounded { .. } => anyhow::anyhow!(
+            "{e}. Give it a region: bounds([x0, y0, z0], [x1, y1, z1]) in the script, or \
+             --bounds X0,Y0,Z0,X1,Y1,Z1"
+        ),
+        e => e.into(),
     }
 }
 

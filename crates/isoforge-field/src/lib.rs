@@ -13,6 +13,11 @@
 //! `gmp` (sin, cos, tan, asin, acos, atan, atan2, exp, ln, powi, pow, mod) are in
 //! [`eval::enclose`]. [`vm::parse_vm`] reads the `.vm` benchmark models.
 //!
+//! A model is worked on inside a region, a [`Bounds`] box: [`find_bounds`] finds one by
+//! interval pruning (and [`ensure_not_empty`] checks a given one), and [`ClippedField`] is
+//! the model clipped to it, outside the box and NaN counted as outside. The mesher, the
+//! slicer and the renderer all evaluate a `ClippedField`, so "inside" means one thing.
+//!
 //! ```
 //! use isoforge_field::{Shape, Tape, PointEval, IntervalEval, Interval};
 //! let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
@@ -24,16 +29,19 @@
 //! ```
 
 pub mod bounds;
+pub mod clip;
 pub mod context;
 pub mod custom;
 pub mod eval;
 pub mod op;
+pub mod region;
 pub mod remap;
 pub mod shape;
 pub mod tape;
 pub mod vm;
 
 pub use bounds::Bounds;
+pub use clip::{ClippedField, clip_grad, clip_interval, clip_value};
 pub use context::{Context, NodeId};
 pub use custom::CustomField;
 pub use eval::batch::BatchEval;
@@ -42,6 +50,7 @@ pub use eval::interval::IntervalEval;
 pub use eval::point::PointEval;
 pub use inari::Interval;
 pub use op::{BinaryOp, UnaryOp};
+pub use region::{RegionError, SEARCH_HALF_SIDE, ensure_not_empty, find_bounds, region_is_empty};
 pub use shape::{Shape, ShapeNode, Var};
 pub use tape::{Choice, Tape};
 pub use vm::{VmError, parse_vm};

@@ -9,7 +9,9 @@
 
 use rayon::prelude::*;
 
-use crate::mesh::{Mesh, cross, dot, sub};
+use glam::DVec3;
+
+use crate::mesh::Mesh;
 
 /// What the checker found.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -182,18 +184,17 @@ pub fn check(mesh: &Mesh) -> MeshReport {
     // Volume, area and zero-area triangles over every triangle with valid indices.
     let centre = r
         .bounds
-        .map(|[lo, hi]| [0, 1, 2].map(|i| (lo[i] + hi[i]) * 0.5))
-        .unwrap_or([0.0; 3]);
+        .map(|[lo, hi]| (DVec3::from(lo) + DVec3::from(hi)) * 0.5)
+        .unwrap_or(DVec3::ZERO);
     let (six_v, twice_area, zero_area) = mesh.triangles[..usable]
         .par_iter()
         .zip(status.par_iter())
         .filter(|(_, s)| **s != 1)
         .map(|(&t, &s)| {
-            let [a, b, c] = mesh.corners(t).map(|p| sub(p, centre));
-            let n = cross(sub(b, a), sub(c, a));
-            let twice = dot(n, n).sqrt();
+            let [a, b, c] = mesh.corners(t).map(|p| p - centre);
+            let twice = (b - a).cross(c - a).length();
             let flat = s == 0 && twice == 0.0;
-            (dot(a, cross(b, c)), twice, usize::from(flat))
+            (a.dot(b.cross(c)), twice, usize::from(flat))
         })
         .reduce(|| (0.0, 0.0, 0), |x, y| (x.0 + y.0, x.1 + y.1, x.2 + y.2));
     r.volume = six_v / 6.0;

@@ -1,6 +1,7 @@
 //! Meshing for isoforge: an interval-pruned octree over a field, dual contouring into a
 //! closed, manifold, consistently oriented triangle mesh, a mesh checker, mesh readers and
-//! writers (STL, OBJ, PLY, 3MF), and a shaded preview renderer.
+//! writers (STL, OBJ, PLY, 3MF). (Preview pictures are `isoforge-render`'s, which needs
+//! no mesh.)
 //!
 //! The main call, field to checked mesh:
 //! ```no_run
@@ -12,16 +13,21 @@
 //! let mesh = mesh_shape(&sphere, &MeshSettings::new(bounds, 6));
 //! assert!(check(&mesh).is_closed_manifold());
 //! ```
+//!
+//! The data flow: shape → `isoforge_field::ClippedField` (the model clipped to
+//! `MeshSettings::bounds`) → the dual-contouring stages in `dc/` (octree, hermite data,
+//! cells and QEF vertices, contour; see `dc/mod.rs`) → [`Mesh`] → [`check`] and [`io`].
+//! Only the mesh type, the settings, `mesh_shape`/`try_mesh_shape`, the checker, the
+//! readers and writers, and sample meshes ([`samples`]) are public: the mesher's stages
+//! are internal, tested in the crate.
 
-pub mod check;
-pub mod dc;
+mod check;
+mod dc;
 pub mod io;
-pub mod mesh;
-pub mod render;
+mod mesh;
 pub mod samples;
 
 pub use check::{MeshReport, check};
-pub use dc::{MeshError, MeshSettings, mesh_shape, try_mesh_shape};
+pub use dc::{MAX_DEPTH, MeshError, MeshSettings, Progress, mesh_shape, try_mesh_shape};
 pub use io::{MeshFormat, MeshIoError, read_mesh, write_mesh};
 pub use mesh::Mesh;
-pub use render::{Image, RenderSettings, View, render};

@@ -1,5 +1,7 @@
 //! The indexed triangle mesh every stage shares.
 
+use glam::{DVec3, Vec3};
+
 /// An indexed triangle mesh: shared vertices, triangles wound counter-clockwise seen from
 /// outside (so normals point out).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -14,22 +16,17 @@ impl Mesh {
     /// The axis-aligned box of all vertices as `[min, max]`, or `None` for a mesh without
     /// vertices.
     pub fn bounds(&self) -> Option<[[f32; 3]; 2]> {
-        let first = *self.vertices.first()?;
-        let mut lo = first;
-        let mut hi = first;
-        for v in &self.vertices {
-            for i in 0..3 {
-                lo[i] = lo[i].min(v[i]);
-                hi[i] = hi[i].max(v[i]);
-            }
-        }
-        Some([lo, hi])
+        let first = Vec3::from(*self.vertices.first()?);
+        let (lo, hi) = self.vertices.iter().fold((first, first), |(lo, hi), &v| {
+            (lo.min(Vec3::from(v)), hi.max(Vec3::from(v)))
+        });
+        Some([lo.to_array(), hi.to_array()])
     }
 
     /// The three corners of a triangle, in f64. Indices must be in range (see
     /// [`Mesh::has_valid_indices`]).
-    pub fn corners(&self, t: [u32; 3]) -> [[f64; 3]; 3] {
-        t.map(|i| self.vertices[i as usize].map(f64::from))
+    pub fn corners(&self, t: [u32; 3]) -> [DVec3; 3] {
+        t.map(|i| Vec3::from(self.vertices[i as usize]).as_dvec3())
     }
 
     /// True when every triangle index names a vertex.
@@ -48,11 +45,11 @@ impl Mesh {
         let Some([lo, hi]) = self.bounds() else {
             return 0.0;
         };
-        let c: [f64; 3] = [0, 1, 2].map(|i| (f64::from(lo[i]) + f64::from(hi[i])) * 0.5);
+        let c = (Vec3::from(lo).as_dvec3() + Vec3::from(hi).as_dvec3()) * 0.5;
         let mut six_v = 0.0;
         for &t in &self.triangles {
-            let [a, b, d] = self.corners(t).map(|p| sub(p, c));
-            six_v += dot(a, cross(b, d));
+            let [a, b, d] = self.corners(t).map(|p| p - c);
+            six_v += a.dot(b.cross(d));
         }
         six_v / 6.0
     }
@@ -68,10 +65,10 @@ impl Mesh {
     /// The unit normal of a triangle from its winding (zero for a degenerate triangle).
     pub fn triangle_normal(&self, t: [u32; 3]) -> [f32; 3] {
         let [a, b, c] = self.corners(t);
-        let n = cross(sub(b, a), sub(c, a));
-        let len = dot(n, n).sqrt();
+        let n = (b - a).cross(c - a);
+        let len = n.length();
         if len > 0.0 && len.is_finite() {
-            n.map(|v| (v / len) as f32)
+            (n / len).as_vec3().to_array()
         } else {
             [0.0; 3]
         }
@@ -79,25 +76,8 @@ impl Mesh {
 }
 
 /// The area of a triangle given by its corners.
-pub fn triangle_area(p: [[f64; 3]; 3]) -> f64 {
-    let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
-    0.5 * dot(n, n).sqrt()
-}
-
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+fn triangle_area([a, b, c]: [DVec3; 3]) -> f64 {
+    0.5 * (b - a).cross(c - a).length()
 }
 
 #[cfg(test)]

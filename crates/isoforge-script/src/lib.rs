@@ -7,10 +7,10 @@
 //! let model = isoforge_script::load_file(Path::new("fixtures/classic/heart.rhai"), &[])?;
 //! let region = match model.bounds {
 //!     Some(b) => b,
-//!     None => isoforge_script::find_bounds(&model.shape)?,
+//!     None => isoforge_field::find_bounds(&model.shape)?,
 //! };
 //! # let _ = region;
-//! # Ok::<(), isoforge_script::ScriptError>(())
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
 //! The scripting language and library are specified in `SCRIPT_API.md`: `x y z`, mixed
@@ -20,7 +20,8 @@
 //!
 //! The path: source → `notation` (math precedence for `^`) → rhai compile and run with the
 //! bindings of `ops`, `library` and `params` → the resulting `Shape`, or a `ScriptError`
-//! located at `path:line:column` by `errors`. `region` finds or checks the model's box.
+//! located at `path:line:column` by `errors`. A model without `bounds(..)` gets its region
+//! from `isoforge_field::find_bounds`: finding a box needs no script, so it lives there.
 
 use std::path::Path;
 use std::sync::{Arc, Mutex};
@@ -35,10 +36,8 @@ mod library;
 mod notation;
 mod ops;
 mod params;
-mod region;
 
 pub use engine::{MAX_CALL_LEVELS, MAX_OPERATIONS};
-pub use region::{SEARCH_HALF_SIDE, ensure_not_empty, region_is_empty};
 
 /// A declared parameter.
 #[derive(Clone, Debug, PartialEq)]
@@ -236,9 +235,4 @@ fn last_code_line(source: &str) -> Option<usize> {
         }
     }
     last
-}
-
-/// Finds a region enclosing the model by interval pruning of a large box.
-pub fn find_bounds(shape: &Shape) -> Result<Bounds, ScriptError> {
-    region::find_bounds(shape)
 }

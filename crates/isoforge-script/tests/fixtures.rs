@@ -3,8 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
+use isoforge_field::find_bounds;
 use isoforge_field::{Bounds, PointEval, Tape};
-use isoforge_script::{find_bounds, load_file};
+use isoforge_script::load_file;
 
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")

@@ -6,6 +6,7 @@
 //! twist about the curve. The curve is sampled here, once, while the graph is built: the
 //! resulting shape is plain arithmetic and never calls back into the closure.
 
+use glam::DVec3;
 use isoforge_field::Shape;
 
 use crate::classic::{cube, cyl, sphere, translate, union_all};
@@ -120,11 +121,11 @@ pub fn curve_follow(
 /// point p is looked up at ((p−o)·r, (p−o)·s, (p−o)·t).
 pub fn place(shape: &Shape, fr: &Frame) -> Shape {
     let d = [
-        Shape::x() - fr.origin[0],
-        Shape::y() - fr.origin[1],
-        Shape::z() - fr.origin[2],
+        Shape::x() - fr.origin.x,
+        Shape::y() - fr.origin.y,
+        Shape::z() - fr.origin.z,
     ];
-    let along = |axis: [f64; 3]| &d[0] * axis[0] + &d[1] * axis[1] + &d[2] * axis[2];
+    let along = |axis: DVec3| &d[0] * axis.x + &d[1] * axis.y + &d[2] * axis.z;
     shape.remap(&along(fr.r), &along(fr.s), &along(fr.t))
 }
 
@@ -192,12 +193,12 @@ mod tests {
         let params = placements(24, [0.0, TAU]).unwrap();
         let frames = rotation_minimizing_frames(&helix, &params, 16, 1e-5);
         for w in frames.windows(2) {
-            let turn = crate::frame::dot(w[0].r, w[1].r);
+            let turn = w[0].r.dot(w[1].r);
             assert!(turn > 0.9, "frame jumped between copies: {turn}");
         }
         let s = curve_fol_box(helix, 24, [0.0, TAU], 0.5).unwrap();
         for fr in &frames {
-            assert!(at(&s, fr.origin) < 0.0);
+            assert!(at(&s, fr.origin.to_array()) < 0.0);
         }
     }
 }

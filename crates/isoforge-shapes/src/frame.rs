@@ -3,39 +3,20 @@
 //! Minimizing Frames", ACM TOG 27(1), 2008). A shape carried along a curve in this frame
 //! turns with the curve but does not twist about it.
 
-/// A 3-vector.
-pub type Vec3 = [f64; 3];
+use glam::DVec3;
 
-fn sub(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+/// A curve: its point at a parameter.
+pub type Curve<'a> = &'a dyn Fn(f64) -> [f64; 3];
+
+fn at(f: Curve, t: f64) -> DVec3 {
+    DVec3::from(f(t))
 }
 
-fn scale(a: Vec3, k: f64) -> Vec3 {
-    [a[0] * k, a[1] * k, a[2] * k]
-}
-
-/// The dot product.
-pub fn dot(a: Vec3, b: Vec3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// The cross product.
-pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(a: Vec3) -> f64 {
-    dot(a, a).sqrt()
-}
-
-/// `a / |a|`, or `None` when `a` is (nearly) zero or not finite.
-pub fn normalize(a: Vec3) -> Option<Vec3> {
-    let n = norm(a);
-    (n.is_finite() && n > 1e-300).then(|| scale(a, 1.0 / n))
+/// `a / |a|`, or `None` when `a` is (nearly) zero or not finite. (glam's `try_normalize`
+/// accepts lengths down to 1e-308, where the direction is mostly rounding.)
+pub fn normalize(a: DVec3) -> Option<DVec3> {
+    let n = a.length();
+    (n.is_finite() && n > 1e-300).then(|| a * (1.0 / n))
 }
 
 /// An orthonormal frame at a point of a curve: `r` and `s` span the normal plane, `t` is
@@ -43,13 +24,13 @@ pub fn normalize(a: Vec3) -> Option<Vec3> {
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct Frame {
     /// The curve point.
-    pub origin: Vec3,
+    pub origin: DVec3,
     /// The first normal ("reference") vector.
-    pub r: Vec3,
+    pub r: DVec3,
     /// The second normal vector, `t × r`.
-    pub s: Vec3,
+    pub s: DVec3,
     /// The unit tangent.
-    pub t: Vec3,
+    pub t: DVec3,
 }
 
 /// The unit tangent of `f` at `t` by central differences with step `h`.
@@ -57,14 +38,14 @@ pub struct Frame {
 /// Where the derivative vanishes (a cusp, a stationary parameter) the central difference is
 /// zero; then wider steps are tried, which pick up the direction the curve leaves in, and
 /// `None` is returned only if the curve does not move near `t` at all.
-pub fn tangent(f: &dyn Fn(f64) -> Vec3, t: f64, h: f64) -> Option<Vec3> {
+pub fn tangent(f: Curve, t: f64, h: f64) -> Option<DVec3> {
     let mut step = h;
     for _ in 0..6 {
-        if let Some(d) = normalize(sub(f(t + step), f(t - step))) {
+        if let Some(d) = normalize(at(f, t + step) - at(f, t - step)) {
             return Some(d);
         }
         // Central differences cancel at a symmetric turning point; one-sided ones do not.
-        if let Some(d) = normalize(sub(f(t + step), f(t))) {
+        if let Some(d) = normalize(at(f, t + step) - at(f, t)) {
             return Some(d);
         }
         step *= 16.0;
@@ -74,41 +55,41 @@ pub fn tangent(f: &dyn Fn(f64) -> Vec3, t: f64, h: f64) -> Option<Vec3> {
 
 /// Any unit vector perpendicular to `t`: the cross product with the axis least aligned
 /// with `t`, which is never near-parallel to it.
-pub fn any_normal(t: Vec3) -> Vec3 {
-    let a = t.map(f64::abs);
-    let axis = if a[0] <= a[1] && a[0] <= a[2] {
-        [1.0, 0.0, 0.0]
-    } else if a[1] <= a[2] {
-        [0.0, 1.0, 0.0]
+pub fn any_normal(t: DVec3) -> DVec3 {
+    let a = t.abs();
+    let axis = if a.x <= a.y && a.x <= a.z {
+        DVec3::X
+    } else if a.y <= a.z {
+        DVec3::Y
     } else {
-        [0.0, 0.0, 1.0]
+        DVec3::Z
     };
-    normalize(cross(t, axis)).unwrap_or([1.0, 0.0, 0.0])
+    normalize(t.cross(axis)).unwrap_or(DVec3::X)
 }
 
 /// Carries `r` (normal to `t0` at `x0`) to the point `x1` with tangent `t1` by two
 /// reflections: first in the plane bisecting x0 x1, then in the plane that maps the
 /// reflected tangent onto `t1`. Returns the new normal, orthonormalized against `t1`.
-pub fn double_reflection(x0: Vec3, t0: Vec3, r0: Vec3, x1: Vec3, t1: Vec3) -> Vec3 {
-    let v1 = sub(x1, x0);
-    let c1 = dot(v1, v1);
+pub fn double_reflection(x0: DVec3, t0: DVec3, r0: DVec3, x1: DVec3, t1: DVec3) -> DVec3 {
+    let v1 = x1 - x0;
+    let c1 = v1.dot(v1);
     let (r_l, t_l) = if c1 > 1e-300 {
         (
-            sub(r0, scale(v1, 2.0 / c1 * dot(v1, r0))),
-            sub(t0, scale(v1, 2.0 / c1 * dot(v1, t0))),
+            r0 - v1 * (2.0 / c1 * v1.dot(r0)),
+            t0 - v1 * (2.0 / c1 * v1.dot(t0)),
         )
     } else {
         (r0, t0)
     };
-    let v2 = sub(t1, t_l);
-    let c2 = dot(v2, v2);
+    let v2 = t1 - t_l;
+    let c2 = v2.dot(v2);
     let r1 = if c2 > 1e-300 {
-        sub(r_l, scale(v2, 2.0 / c2 * dot(v2, r_l)))
+        r_l - v2 * (2.0 / c2 * v2.dot(r_l))
     } else {
         r_l
     };
     // Rounding drifts r off the normal plane over many steps: project it back.
-    normalize(sub(r1, scale(t1, dot(r1, t1)))).unwrap_or_else(|| any_normal(t1))
+    normalize(r1 - t1 * r1.dot(t1)).unwrap_or_else(|| any_normal(t1))
 }
 
 /// Rotation-minimizing frames of `f` at `params` (in increasing or decreasing order).
@@ -117,24 +98,19 @@ pub fn double_reflection(x0: Vec3, t0: Vec3, r0: Vec3, x1: Vec3, t1: Vec3) -> Ve
 /// parameters, since double reflection is exact only in the limit of small steps.
 /// Tangents that cannot be found (the curve stands still) repeat the last good one, or the
 /// z axis at the start.
-pub fn rotation_minimizing_frames(
-    f: &dyn Fn(f64) -> Vec3,
-    params: &[f64],
-    substeps: usize,
-    h: f64,
-) -> Vec<Frame> {
+pub fn rotation_minimizing_frames(f: Curve, params: &[f64], substeps: usize, h: f64) -> Vec<Frame> {
     let mut frames = Vec::with_capacity(params.len());
     let Some(&first) = params.first() else {
         return frames;
     };
     let mut last_t = first_tangent(f, params, h);
-    let mut x = f(first);
+    let mut x = at(f, first);
     let mut r = any_normal(last_t);
-    let push = |frames: &mut Vec<Frame>, x: Vec3, r: Vec3, t: Vec3| {
+    let push = |frames: &mut Vec<Frame>, x: DVec3, r: DVec3, t: DVec3| {
         frames.push(Frame {
             origin: x,
             r,
-            s: cross(t, r),
+            s: t.cross(r),
             t,
         })
     };
@@ -144,7 +120,7 @@ pub fn rotation_minimizing_frames(
         let substeps = substeps.max(1);
         for k in 1..=substeps {
             let u = a + (b - a) * k as f64 / substeps as f64;
-            let x1 = f(u);
+            let x1 = at(f, u);
             let t1 = tangent(f, u, h).unwrap_or(last_t);
             r = double_reflection(x, last_t, r, x1, t1);
             x = x1;
@@ -156,19 +132,19 @@ pub fn rotation_minimizing_frames(
 }
 
 /// The tangent at the first parameter, or the first one found further on, or z.
-fn first_tangent(f: &dyn Fn(f64) -> Vec3, params: &[f64], h: f64) -> Vec3 {
+fn first_tangent(f: Curve, params: &[f64], h: f64) -> DVec3 {
     params
         .iter()
         .find_map(|&t| tangent(f, t, h))
-        .unwrap_or([0.0, 0.0, 1.0])
+        .unwrap_or(DVec3::Z)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn close(a: Vec3, b: Vec3, tol: f64) -> bool {
-        norm(sub(a, b)) < tol
+    fn close(a: DVec3, b: [f64; 3], tol: f64) -> bool {
+        a.distance(DVec3::from(b)) < tol
     }
 
     #[test]
@@ -196,10 +172,10 @@ mod tests {
         let helix = |t: f64| [t.cos(), t.sin(), 0.3 * t];
         let params: Vec<f64> = (0..20).map(|i| i as f64 * 0.5).collect();
         for fr in rotation_minimizing_frames(&helix, &params, 16, 1e-5) {
-            assert!((dot(fr.r, fr.r) - 1.0).abs() < 1e-9);
-            assert!((dot(fr.t, fr.t) - 1.0).abs() < 1e-9);
-            assert!(dot(fr.r, fr.t).abs() < 1e-9);
-            assert!(close(cross(fr.r, fr.s), fr.t, 1e-9));
+            assert!((fr.r.length_squared() - 1.0).abs() < 1e-9);
+            assert!((fr.t.length_squared() - 1.0).abs() < 1e-9);
+            assert!(fr.r.dot(fr.t).abs() < 1e-9);
+            assert!(close(fr.r.cross(fr.s), fr.t.to_array(), 1e-9));
         }
     }
 
@@ -224,7 +200,7 @@ mod tests {
         let params: Vec<f64> = (0..5).map(f64::from).collect();
         let frames = rotation_minimizing_frames(&line, &params, 8, 1e-5);
         for fr in &frames {
-            assert!(close(fr.r, frames[0].r, 1e-9));
+            assert!(close(fr.r, frames[0].r.to_array(), 1e-9));
         }
     }
 }

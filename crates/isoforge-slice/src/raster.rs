@@ -1,17 +1,18 @@
 //! Layer images: one 8-bit grayscale picture per layer at the printer's pixel grid, white
 //! where there is material, with anti-aliased edges.
 //!
-//! From a field, each pixel is the field at its centre: blocks of pixels are pruned with
-//! interval arithmetic (full and empty blocks are filled without evaluating a pixel, and
-//! each block's children use the tape simplified for it); in the blocks that hold the
-//! surface, a pixel's coverage is read off the field and its gradient, 0.5 − f / (|∇f|·p),
-//! which sums to the exact area along a straight edge. From a mesh, the layer's outline is
+//! From a field, each pixel is the field clipped to the region (`ClippedField`) at its
+//! centre: blocks of pixels are pruned with interval arithmetic (full and empty blocks are
+//! filled without evaluating a pixel, and each block's children use the tape simplified
+//! for it); in the blocks that hold the surface, a pixel's coverage is read off the field
+//! and its gradient, 0.5 − F / (|∇F|·p), which sums to the exact area along a straight
+//! edge (the region's faces included: there F is the distance to the face). From a mesh, the layer's outline is
 //! filled with tiny-skia's anti-aliased `Mask`. Layers run in parallel and are encoded to
 //! PNG as they finish, so only a few raw images are ever in memory.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use isoforge_field::{GradEval, Interval, IntervalEval, Tape};
+use isoforge_field::{ClippedField, GradEval, Interval, IntervalEval};
 use rayon::prelude::*;
 
 use crate::SliceError;
@@ -254,7 +255,6 @@ pub fn render_outline(contours: &[crate::Contour], grid: &PixelGrid) -> Vec<u8> 
 }
 
 struct FieldRaster<'a> {
-    f: &'a FieldSlicer,
     grid: &'a PixelGrid,
     z: f64,
     zi: Interval,
@@ -268,7 +268,6 @@ fn render_field(f: &FieldSlicer, grid: &PixelGrid, layer: &Layer) -> Vec<u8> {
     let z = layer.model_z;
     let b = f.bounds();
     let mut r = FieldRaster {
-        f,
         grid,
         z,
         zi: Interval::try_from((z, z)).unwrap_or(Interval::ENTIRE),
@@ -279,51 +278,46 @@ fn render_field(f: &FieldSlicer, grid: &PixelGrid, layer: &Layer) -> Vec<u8> {
     if z < b.min[2] || z > b.max[2] {
         return r.img;
     }
-    let tape = f.tape().clone();
+    let field = f.field().clone();
     for row in (0..grid.height).step_by(ROOT as usize) {
         for col in (0..grid.width).step_by(ROOT as usize) {
-            r.block(&tape, col, row, ROOT);
+            r.block(&field, col, row, ROOT);
         }
     }
     r.img
 }
 
 impl FieldRaster<'_> {
-    fn block(&mut self, tape: &Tape, col: u32, row: u32, n: u32) {
+    fn block(&mut self, field: &ClippedField, col: u32, row: u32, n: u32) {
         let g = self.grid;
         let (c1, r1) = ((col + n).min(g.width), (row + n).min(g.height));
         if col >= c1 || row >= r1 {
             return;
         }
         // The box the block's pixels cover (not just their centres: an edge pixel whose
-        // centre is outside still gets partial coverage), clipped to the region.
+        // centre is outside still gets partial coverage).
         let half = g.pixel * 0.5;
         let lo = g.center(col, r1 - 1).map(|v| v - half);
         let hi = g.center(c1 - 1, row).map(|v| v + half);
-        let b = self.f.bounds();
-        let x = (lo[0].max(b.min[0]), hi[0].min(b.max[0]));
-        let y = (lo[1].max(b.min[1]), hi[1].min(b.max[1]));
-        if x.0 > x.1 || y.0 > y.1 {
-            return;
-        }
-        let within =
-            lo[0] >= b.min[0] && hi[0] <= b.max[0] && lo[1] >= b.min[1] && hi[1] <= b.max[1];
-        let (Ok(xi), Ok(yi)) = (Interval::try_from(x), Interval::try_from(y)) else {
+        let (Ok(xi), Ok(yi)) = (
+            Interval::try_from((lo[0], hi[0])),
+            Interval::try_from((lo[1], hi[1])),
+        ) else {
             return;
         };
-        let v = self.iev.eval(tape, [xi, yi, self.zi]);
+        let v = field.interval(&mut self.iev, [xi, yi, self.zi]);
         if v.inf() >= 0.0 {
             return;
         }
-        if within && v.sup() < 0.0 {
+        if v.sup() < 0.0 {
             self.fill(col, row, c1, r1);
             return;
         }
         if n <= LEAF {
-            self.pixels(tape, col, row, c1, r1);
+            self.pixels(field, col, row, c1, r1);
             return;
         }
-        let child = tape.simplify(self.iev.choices());
+        let child = field.narrow(&self.iev);
         let h = n / 2;
         for (dc, dr) in [(0, 0), (h, 0), (0, h), (h, h)] {
             self.block(&child, col + dc, row + dr, h);
@@ -337,21 +331,16 @@ impl FieldRaster<'_> {
         }
     }
 
-    fn pixels(&mut self, tape: &Tape, c0: u32, r0: u32, c1: u32, r1: u32) {
+    fn pixels(&mut self, field: &ClippedField, c0: u32, r0: u32, c1: u32, r1: u32) {
         let w = self.grid.width as usize;
-        let b = self.f.bounds();
         let p = self.grid.pixel;
         for r in r0..r1 {
             for c in c0..c1 {
                 let q = self.grid.center(c, r);
-                if q[0] < b.min[0] || q[0] > b.max[0] || q[1] < b.min[1] || q[1] > b.max[1] {
-                    continue;
-                }
-                let g = self.gev.eval(tape, [q[0], q[1], self.z]);
+                let g = field.grad(&mut self.gev, [q[0], q[1], self.z]);
                 let slope = g.d[0].hypot(g.d[1]);
-                let cov = if g.v.is_nan() {
-                    0.0
-                } else if slope.is_finite() && slope > 0.0 {
+                // F is never NaN (NaN counts as outside: +inf, no coverage).
+                let cov = if slope.is_finite() && slope > 0.0 {
                     (0.5 - g.v / (slope * p)).clamp(0.0, 1.0)
                 } else if g.v < 0.0 {
                     1.0

@@ -7,8 +7,7 @@ use std::time::Instant;
 
 use anyhow::{Context as _, Result, bail};
 use clap::Args;
-use isoforge_mesh::dc::MAX_DEPTH;
-use isoforge_mesh::{MeshFormat, MeshSettings, check, write_mesh};
+use isoforge_mesh::{MAX_DEPTH, MeshFormat, MeshSettings, check, write_mesh};
 use serde_json::json;
 
 use crate::common::{Global, ModelArgs, print_json, progress_bar};
@@ -119,7 +118,7 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
     settings.progress = Some(Arc::new(move |f: f64| {
         bar_cb.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64)
     }));
-    let mesh = isoforge_mesh::dc::try_mesh_shape(&loaded.model.shape, &settings)?;
+    let mesh = isoforge_mesh::try_mesh_shape(&loaded.model.shape, &settings)?;
     bar.finish_and_clear();
     if mesh.triangles.is_empty() {
         bail!(

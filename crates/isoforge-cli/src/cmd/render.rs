@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::{Context as _, Result};
 use clap::{Args, ValueEnum};
-use isoforge_mesh::{RenderSettings, View, render};
+use isoforge_render::{RenderSettings, View, render};
 use serde_json::json;
 
 use crate::common::{Global, ModelArgs, print_json, write_atomic};

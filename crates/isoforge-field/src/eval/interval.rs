@@ -250,6 +250,12 @@ impl IntervalEval {
     pub fn choices(&self) -> &[Choice] {
         &self.choices
     }
+
+    /// Forgets the last choices, for a pass that decided without evaluating the tape:
+    /// simplifying by no choices keeps the tape whole, which is right anywhere.
+    pub(crate) fn forget_choices(&mut self) {
+        self.choices.clear();
+    }
 }
 
 /// An immediate operand as an interval (NaN immediates are NaN everywhere; infinite ones

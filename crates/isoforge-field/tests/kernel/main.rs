@@ -9,4 +9,5 @@ mod conformance;
 mod context;
 mod enclose;
 mod laws;
+mod region;
 mod vm;

@@ -18,6 +18,8 @@
 //! are split along their shorter diagonal; a diagonal joins two cells that share only the
 //! polygon's lattice edge, so no other polygon can hold it.
 
+use glam::DVec3;
+
 use super::cell::{CASES, NONE, edge_corners, edge_id, other_axes};
 use super::hermite::{Crossing, corner_index};
 use super::octree::Grid;
@@ -127,7 +129,12 @@ pub fn cell_vertices(
                 }
                 let lo = grid.corner([base[0] + i as i64, base[1] + j as i64, base[2] + k as i64]);
                 let vert = out.vertices.len() as u32;
-                place_vertices(grid, lo, &qefs[..case.patches as usize], &mut out.vertices);
+                place_vertices(
+                    grid,
+                    lo.into(),
+                    &qefs[..case.patches as usize],
+                    &mut out.vertices,
+                );
                 let mut face = [NO_VERT; 3];
                 for (axis, slot) in face.iter_mut().enumerate() {
                     if !case.lower_ambiguous[axis] {
@@ -135,18 +142,18 @@ pub fn cell_vertices(
                     }
                     *slot = out.vertices.len() as u32;
                     for pair in 0..2u8 {
-                        let mut sum = [0.0f64; 3];
+                        let mut sum = DVec3::ZERO;
                         let mut count = 0.0;
                         for e in 0..12 {
                             if case.lower_pair[axis][e] == pair
                                 && let Some(x) = crossing_of(e)
                             {
-                                (0..3).for_each(|a| sum[a] += x.pos[a]);
+                                sum += x.pos;
                                 count += 1.0;
                             }
                         }
                         let count: f64 = if count > 0.0 { count } else { 1.0 };
-                        out.vertices.push(sum.map(|v| (v / count) as f32));
+                        out.vertices.push((sum / count).as_vec3().to_array());
                     }
                 }
                 out.cells.push(CellOut {
@@ -166,7 +173,7 @@ pub fn cell_vertices(
                 axis: edge.axis,
                 at: at.map(|v| v as u8),
                 start_inside: signs[c] == 1,
-                pos: x.pos.map(|v| v as f32),
+                pos: x.pos.as_vec3().to_array(),
             });
         }
     }
@@ -180,13 +187,12 @@ const INSET: f64 = 1e-3;
 /// One vertex per patch: the QEF minimizer kept inside the cell. In a cell with several
 /// patches a minimizer outside the cell falls back to its patch's mass point, and so do
 /// all of them if two would coincide: distinct patches must stay distinct points.
-fn place_vertices(grid: &Grid, lo: [f64; 3], qefs: &[Qef], out: &mut Vec<[f32; 3]>) {
+fn place_vertices(grid: &Grid, lo: DVec3, qefs: &[Qef], out: &mut Vec<[f32; 3]>) {
     let inset = grid.cell * INSET;
-    let clamp = |v: [f64; 3]| {
-        [0, 1, 2].map(|a| v[a].clamp(lo[a] + inset, lo[a] + grid.cell - inset) as f32)
-    };
-    let inside =
-        |v: [f64; 3]| (0..3).all(|a| v[a] >= lo[a] + inset && v[a] <= lo[a] + grid.cell - inset);
+    let (min, max) = (lo + inset, lo + grid.cell - inset);
+    // Per axis with f64::clamp, which (unlike glam's max-then-min) keeps a -0.0.
+    let clamp = |v: DVec3| [0, 1, 2].map(|a| v[a].clamp(min[a], max[a]) as f32);
+    let inside = |v: DVec3| v.cmpge(min).all() && v.cmple(max).all();
     let start = out.len();
     for q in qefs {
         let v = q.solve();

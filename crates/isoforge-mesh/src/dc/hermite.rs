@@ -9,10 +9,12 @@
 //! touches a pruned block), else the sample of its owner, the block whose half-open range
 //! holds it.
 
-use super::octree::{Class, Grid};
-use super::sampler::{Clip, Sampler};
+use glam::DVec3;
 
-/// Bisection rounds on each crossing. After 8 halvings the bracket is 1/256 of a cell;
+use super::octree::{Class, Grid};
+use super::sampler::Sampler;
+
+/// Bisection rounds on each crossing. After 6 halvings the bracket is 1/64 of a cell;
 /// the final linear interpolation on the bracket makes smooth surfaces far finer.
 const BISECTION_ROUNDS: usize = 6;
 
@@ -20,9 +22,9 @@ const BISECTION_ROUNDS: usize = 6;
 #[derive(Clone, Copy, Debug)]
 pub struct Crossing {
     /// Where F changes sign.
-    pub pos: [f64; 3],
+    pub pos: DVec3,
     /// Unit outward normal.
-    pub normal: [f64; 3],
+    pub normal: DVec3,
 }
 
 /// Reusable per-thread buffers.
@@ -54,7 +56,6 @@ pub fn own_signs<S: Sampler>(
     sampler: &S,
     ev: &mut S::Evals,
     local: &S::Local,
-    clip: &Clip,
     grid: &Grid,
     coords: [i64; 3],
     scratch: &mut Scratch,
@@ -81,9 +82,8 @@ pub fn own_signs<S: Sampler>(
     sc.out.resize(n, 0.0);
     sampler.batch(ev, local, &sc.xs, &sc.ys, &sc.zs, &mut sc.out);
     bits.fill(0);
-    for c in 0..n {
-        let p = [sc.xs[c], sc.ys[c], sc.zs[c]];
-        if Clip::combine(sc.out[c], clip.dist(p)) < 0.0 {
+    for (c, &f) in sc.out.iter().enumerate() {
+        if f < 0.0 {
             bits[c / 64] |= 1 << (c % 64);
         }
     }
@@ -183,7 +183,6 @@ pub fn crossings<S: Sampler>(
     sampler: &S,
     ev: &mut S::Evals,
     local: &S::Local,
-    clip: &Clip,
     grid: &Grid,
     coords: [i64; 3],
     signs: &[u8],
@@ -250,8 +249,7 @@ pub fn crossings<S: Sampler>(
         sc.out.resize(m, 0.0);
         sampler.batch(ev, local, &sc.xs, &sc.ys, &sc.zs, &mut sc.out);
         for (e, edge) in edges.iter().enumerate() {
-            let p = [sc.xs[e], sc.ys[e], sc.zs[e]];
-            let f = Clip::combine(sc.out[e], clip.dist(p));
+            let f = sc.out[e];
             let mid = 0.5 * (sc.lo[e] + sc.hi[e]);
             let start_inside = signs[edge.corner as usize] == 1;
             if (f < 0.0) == start_inside {
@@ -287,8 +285,7 @@ pub fn crossings<S: Sampler>(
         sc.out.resize(ends.len(), 0.0);
         sampler.batch(ev, local, &sc.xs, &sc.ys, &sc.zs, &mut sc.out);
         for (k, &(e, at_lo)) in ends.iter().enumerate() {
-            let p = [sc.xs[k], sc.ys[k], sc.zs[k]];
-            let f = Clip::combine(sc.out[k], clip.dist(p));
+            let f = sc.out[k];
             if at_lo { sc.flo[e] = f } else { sc.fhi[e] = f }
         }
     }
@@ -314,14 +311,18 @@ pub fn crossings<S: Sampler>(
         } else {
             -1.0
         };
-        let normal = normal_at(sampler, ev, local, clip, grid.cell, pos, outward, sc);
-        out.push(Crossing { pos, normal });
+        let normal = normal_at(sampler, ev, local, grid.cell, pos, outward.into(), sc);
+        out.push(Crossing {
+            pos: pos.into(),
+            normal,
+        });
     }
 }
 
-fn unit(v: [f64; 3]) -> Option<[f64; 3]> {
-    let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    (len.is_finite() && len > 1e-300).then(|| v.map(|c| c / len))
+/// `v / |v|`, unless `|v|` is infinite, NaN or too small to divide by.
+fn unit(v: DVec3) -> Option<DVec3> {
+    let len = v.length();
+    (len.is_finite() && len > 1e-300).then(|| v / len)
 }
 
 /// The outward normal: the gradient of F; where that is NaN, infinite or zero, a central
@@ -332,18 +333,15 @@ fn normal_at<S: Sampler>(
     sampler: &S,
     ev: &mut S::Evals,
     local: &S::Local,
-    clip: &Clip,
     cell: f64,
     p: [f64; 3],
-    outward: [f64; 3],
+    outward: DVec3,
     sc: &mut Scratch,
-) -> [f64; 3] {
-    let d = clip.dist(p);
+) -> DVec3 {
+    // Where the region's face caps the model, this is the face's normal (see
+    // `isoforge_field::clip_grad`).
     let g = sampler.grad(ev, local, p);
-    if !g[0].is_nan() && d >= g[0] {
-        return clip.normal(p);
-    }
-    if let Some(n) = unit([g[1], g[2], g[3]]) {
+    if let Some(n) = unit(DVec3::new(g[1], g[2], g[3])) {
         return n;
     }
     let h = cell * 1e-3;
@@ -362,6 +360,6 @@ fn normal_at<S: Sampler>(
     sc.out.clear();
     sc.out.resize(6, 0.0);
     sampler.batch(ev, local, &sc.xs, &sc.ys, &sc.zs, &mut sc.out);
-    let fd = [0, 1, 2].map(|a| sc.out[2 * a] - sc.out[2 * a + 1]);
+    let fd = DVec3::from([0, 1, 2].map(|a| sc.out[2 * a] - sc.out[2 * a + 1]));
     unit(fd).unwrap_or(outward)
 }

@@ -12,8 +12,8 @@
 //! 4. `contour.rs`: one polygon per sign-changing edge, split into triangles so that the
 //!    result is a 2-manifold (the module doc there has the argument).
 //!
-//! The region's outside counts as outside (F = max(f, d_box), NaN = outside; `sampler.rs`),
-//! so models cut by their region come out capped.
+//! Everything samples the field clipped to the region (`isoforge_field::ClippedField`:
+//! F = max(f, d_box), NaN = outside), so models cut by their region come out capped.
 
 pub mod cell;
 pub mod contour;
@@ -29,7 +29,7 @@ use std::fmt;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use isoforge_field::{Bounds, Shape, Tape};
+use isoforge_field::{Bounds, ClippedField, Shape};
 use rayon::prelude::*;
 
 use crate::mesh::Mesh;
@@ -37,7 +37,7 @@ use contour::{BlockOut, CENTRE_FLAG};
 use hermite::{Crossing, EdgeRef, Scratch};
 use octree::{Class, Grid, Octree};
 use qef::Qef;
-use sampler::{Clip, EvalPool, Sampler, TapeSampler};
+use sampler::{EvalPool, Sampler, TapeSampler};
 
 /// The deepest level accepted: 2^16 cells a side is far beyond any printer's resolution
 /// for a region, and keeps lattice indices small.
@@ -109,7 +109,7 @@ pub fn mesh_shape(shape: &Shape, settings: &MeshSettings) -> Mesh {
     match try_mesh_shape(shape, &s) {
         Ok(mesh) => mesh,
         // Only the worker pool can fail here: mesh on the global pool instead.
-        Err(_) => mesh_sampler(&TapeSampler::new(Tape::new(shape)), &s),
+        Err(_) => mesh_sampler(&tape_sampler(shape, &s), &s),
     }
 }
 
@@ -120,7 +120,7 @@ pub fn try_mesh_shape(shape: &Shape, settings: &MeshSettings) -> Result<Mesh, Me
             depth: settings.depth,
         });
     }
-    let sampler = TapeSampler::new(Tape::new(shape));
+    let sampler = tape_sampler(shape, settings);
     let run = || mesh_sampler(&sampler, settings);
     if settings.threads == 0 {
         return Ok(run());
@@ -133,6 +133,11 @@ pub fn try_mesh_shape(shape: &Shape, settings: &MeshSettings) -> Result<Mesh, Me
             message: e.to_string(),
         })?;
     Ok(pool.install(run))
+}
+
+/// The shape clipped to the settings' region, as the mesher samples it.
+fn tape_sampler(shape: &Shape, settings: &MeshSettings) -> TapeSampler {
+    TapeSampler::new(ClippedField::new(shape, settings.bounds))
 }
 
 /// Reports progress from many workers, about a hundred times in all.
@@ -182,13 +187,10 @@ pub(crate) fn mesh_sampler_blocks<S: Sampler>(
     let progress = settings.progress.as_ref();
     let depth = u32::from(settings.depth.min(MAX_DEPTH));
     let grid = Grid::new(&settings.bounds, depth, block_shift);
-    let clip = Clip {
-        bounds: settings.bounds,
-    };
     if let Some(p) = progress {
         p(0.0);
     }
-    let tree = Octree::build(sampler, &clip, grid);
+    let tree = Octree::build(sampler, grid);
     let blocks = &tree.blocks;
     let pool = EvalPool::new(sampler);
 
@@ -206,7 +208,6 @@ pub(crate) fn mesh_sampler_blocks<S: Sampler>(
                     sampler,
                     guard.get(),
                     &block.local,
-                    &clip,
                     &grid,
                     block.coords,
                     scratch,
@@ -245,7 +246,6 @@ pub(crate) fn mesh_sampler_blocks<S: Sampler>(
                     sampler,
                     guard.get(),
                     &block.local,
-                    &clip,
                     &grid,
                     block.coords,
                     &sc.signs,

@@ -12,7 +12,7 @@ use isoforge_field::Bounds;
 use isoforge_field::Interval;
 use rayon::prelude::*;
 
-use super::sampler::{Clip, EvalPool, Sampler};
+use super::sampler::{EvalPool, Sampler};
 
 /// Blocks are 2^BLOCK_SHIFT cells a side. Measured on the bench models at depth 9 (CPU
 /// seconds, 8³ vs 16³ blocks): gyroid_sphere 8.3 vs 7.3, sphere 1.6 vs 1.2, heart 1.7 vs
@@ -113,12 +113,11 @@ pub struct Octree<L> {
 
 impl<L: Clone + Send + Sync> Octree<L> {
     /// Builds the tree with interval pruning, in parallel over subtrees.
-    pub fn build<S: Sampler<Local = L>>(sampler: &S, clip: &Clip, grid: Grid) -> Octree<L> {
+    pub fn build<S: Sampler<Local = L>>(sampler: &S, grid: Grid) -> Octree<L> {
         let pool = EvalPool::new(sampler);
         let ctx = BuildCtx {
             sampler,
             pool: &pool,
-            clip,
             grid,
         };
         let built = ctx.build(0, [0; 3], &sampler.root());
@@ -159,30 +158,19 @@ impl<L: Clone + Send + Sync> Octree<L> {
 struct BuildCtx<'a, 's, S: Sampler> {
     sampler: &'s S,
     pool: &'a EvalPool<'s, S>,
-    clip: &'a Clip,
     grid: Grid,
 }
 
 impl<S: Sampler> BuildCtx<'_, '_, S> {
     fn build(&self, level: u32, coords: [i64; 3], local: &S::Local) -> Built<S::Local> {
         let b = self.grid.cube(level, coords);
-        let (dlo, dhi) = self.clip.interval(b);
-        if dlo >= 0.0 {
-            return Built::Empty;
-        }
         let mut guard = self.pool.take();
+        // The clipped field: no point inside when its lower end is >= 0 (inside is F < 0).
         let f = self.sampler.interval(guard.get(), local, b);
-        // F = max(f, d_box); an empty f interval means f is NaN everywhere: outside.
-        let lo = f.inf().max(dlo);
-        let hi = if f.is_empty() {
-            f64::INFINITY
-        } else {
-            f.sup().max(dhi)
-        };
-        if lo >= 0.0 || lo.is_nan() {
+        if f.inf() >= 0.0 {
             return Built::Empty;
         }
-        if hi < 0.0 {
+        if f.sup() < 0.0 {
             return Built::Full;
         }
         let narrowed = self.sampler.narrow(guard.get(), local);

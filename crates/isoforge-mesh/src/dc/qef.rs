@@ -4,62 +4,71 @@
 //! patch (rank 1 or 2) keeps its vertex near the middle of its crossings instead of
 //! sliding along the free directions.
 
+use glam::{DMat3, DVec3};
+
 /// Singular values below this fraction of the largest are dropped. 0.1 is the usual
 /// choice (Ju et al.; fidget and libfive use similar cut-offs): it keeps true corners
 /// (three well separated normals) and treats nearly parallel normals as one plane.
 const SINGULAR_CUTOFF: f64 = 0.1;
 
 /// Accumulates plane constraints (point, unit normal).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct Qef {
-    ata: [[f64; 3]; 3],
-    sum_p: [f64; 3],
+    /// AᵀA = Σ n nᵀ.
+    ata: DMat3,
+    sum_p: DVec3,
     count: usize,
-    planes: Vec<([f64; 3], [f64; 3])>,
+    planes: Vec<(DVec3, DVec3)>,
+}
+
+impl Default for Qef {
+    /// No planes. (Not derived: glam's default matrix is the identity, not zero.)
+    fn default() -> Self {
+        Qef {
+            ata: DMat3::ZERO,
+            sum_p: DVec3::ZERO,
+            count: 0,
+            planes: Vec::new(),
+        }
+    }
 }
 
 impl Qef {
     /// Clears for reuse (keeps its buffer).
     pub fn clear(&mut self) {
-        self.ata = [[0.0; 3]; 3];
-        self.sum_p = [0.0; 3];
+        self.ata = DMat3::ZERO;
+        self.sum_p = DVec3::ZERO;
         self.count = 0;
         self.planes.clear();
     }
 
     /// Adds the plane through `p` with unit normal `n`.
-    pub fn add(&mut self, p: [f64; 3], n: [f64; 3]) {
-        for i in 0..3 {
-            for j in 0..3 {
-                self.ata[i][j] += n[i] * n[j];
-            }
-            self.sum_p[i] += p[i];
-        }
+    pub fn add(&mut self, p: DVec3, n: DVec3) {
+        // The outer product n nᵀ, column j being n · n[j].
+        self.ata += DMat3::from_cols(n * n.x, n * n.y, n * n.z);
+        self.sum_p += p;
         self.count += 1;
         self.planes.push((p, n));
     }
 
     /// The mean of the crossings.
-    pub fn mass_point(&self) -> [f64; 3] {
-        let n = self.count.max(1) as f64;
-        self.sum_p.map(|s| s / n)
+    pub fn mass_point(&self) -> DVec3 {
+        self.sum_p / self.count.max(1) as f64
     }
 
     /// The minimizer, or the mass point when nothing better is defined.
-    pub fn solve(&self) -> [f64; 3] {
+    pub fn solve(&self) -> DVec3 {
         if self.count == 0 {
-            return [0.0; 3];
+            return DVec3::ZERO;
         }
-        let m = self.sum_p.map(|s| s / self.count as f64);
+        let m = self.sum_p / self.count as f64;
         // Aᵀb around the mass point: Σ n (n · (p − m)).
-        let mut atb = [0.0; 3];
+        let mut atb = DVec3::ZERO;
         for (p, n) in &self.planes {
-            let d = (0..3).map(|i| n[i] * (p[i] - m[i])).sum::<f64>();
-            for i in 0..3 {
-                atb[i] += n[i] * d;
-            }
+            atb += *n * n.dot(*p - m);
         }
-        let (values, vectors) = eigen_sym(self.ata);
+        // AᵀA is symmetric: its columns are its rows.
+        let (values, vectors) = eigen_sym(self.ata.to_cols_array_2d());
         let max = values.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
         if max <= 0.0 || !max.is_finite() {
             return m;
@@ -71,17 +80,10 @@ impl Qef {
             if values[k].abs() < cut {
                 continue;
             }
-            let v = [vectors[0][k], vectors[1][k], vectors[2][k]];
-            let proj = (0..3).map(|i| v[i] * atb[i]).sum::<f64>() / values[k];
-            for i in 0..3 {
-                x[i] += v[i] * proj;
-            }
+            let v = DVec3::new(vectors[0][k], vectors[1][k], vectors[2][k]);
+            x += v * (v.dot(atb) / values[k]);
         }
-        if x.iter().all(|c| c.is_finite()) {
-            x
-        } else {
-            m
-        }
+        if x.is_finite() { x } else { m }
     }
 }
 
@@ -138,16 +140,20 @@ pub fn eigen_sym(mut a: [[f64; 3]; 3]) -> ([f64; 3], [[f64; 3]; 3]) {
 mod tests {
     use super::*;
 
-    fn near(a: [f64; 3], b: [f64; 3]) -> bool {
-        (0..3).all(|i| (a[i] - b[i]).abs() < 1e-9)
+    fn near(a: DVec3, b: [f64; 3]) -> bool {
+        (a - DVec3::from(b)).abs().max_element() < 1e-9
+    }
+
+    fn add(q: &mut Qef, p: [f64; 3], n: [f64; 3]) {
+        q.add(p.into(), n.into());
     }
 
     #[test]
     fn corner_of_three_planes() {
         let mut q = Qef::default();
-        q.add([0.3, 0.0, 0.0], [1.0, 0.0, 0.0]);
-        q.add([0.0, 0.7, 0.0], [0.0, 1.0, 0.0]);
-        q.add([0.0, 0.0, 0.2], [0.0, 0.0, 1.0]);
+        add(&mut q, [0.3, 0.0, 0.0], [1.0, 0.0, 0.0]);
+        add(&mut q, [0.0, 0.7, 0.0], [0.0, 1.0, 0.0]);
+        add(&mut q, [0.0, 0.0, 0.2], [0.0, 0.0, 1.0]);
         assert!(near(q.solve(), [0.3, 0.7, 0.2]));
     }
 
@@ -160,7 +166,7 @@ mod tests {
             [0.0, 1.0, 0.5],
             [1.0, 1.0, 0.5],
         ] {
-            q.add(p, [0.0, 0.0, 1.0]);
+            add(&mut q, p, [0.0, 0.0, 1.0]);
         }
         assert!(near(q.solve(), [0.5, 0.5, 0.5]));
     }
@@ -168,11 +174,11 @@ mod tests {
     #[test]
     fn nearly_parallel_normals_do_not_fly_off() {
         let mut q = Qef::default();
-        q.add([0.0, 0.0, 0.5], [0.0, 0.0, 1.0]);
+        add(&mut q, [0.0, 0.0, 0.5], [0.0, 0.0, 1.0]);
         let n = [1e-6, 0.0, (1.0f64 - 1e-12).sqrt()];
-        q.add([1.0, 0.0, 0.5], n);
+        add(&mut q, [1.0, 0.0, 0.5], n);
         let x = q.solve();
-        assert!(x.iter().all(|c| c.abs() <= 1.0), "{x:?}");
+        assert!(x.abs().max_element() <= 1.0, "{x:?}");
     }
 
     #[test]

@@ -1,18 +1,18 @@
-//! What the mesher asks of a field, and the region clip.
+//! What the mesher asks of a field.
 //!
 //! The mesher is written against [`Sampler`] so that it runs the same on a compiled tape
 //! ([`TapeSampler`], the product) and on plain closures (the exhaustive sign-pattern tests).
-//! The region is applied here, not in the user's tape: F = max(f, d_box), with d_box > 0
-//! outside the box, so a model cut by its region is capped; and NaN counts as outside
-//! (a corner is inside iff F < 0, strictly), which `max` on floats would not give.
+//! A sampler gives the field already clipped to the region (`isoforge_field::clip`:
+//! F = max(f, d_box), NaN counted as outside), so a model cut by its region is capped and
+//! a corner is inside iff F < 0, strictly.
 
 use std::sync::Mutex;
 
 use isoforge_field::Interval;
-use isoforge_field::{BatchEval, Bounds, Choice, GradEval, IntervalEval, Tape};
+use isoforge_field::{BatchEval, ClippedField, GradEval, IntervalEval};
 
-/// A field the mesher can sample. `Local` is the field narrowed to one octree cell (a
-/// simplified tape); `Evals` is one thread's evaluator state.
+/// A field clipped to the region, as the mesher samples it. `Local` is the field narrowed
+/// to one octree cell (a simplified tape); `Evals` is one thread's evaluator state.
 pub trait Sampler: Sync {
     /// The field restricted to a region (valid inside the box it was narrowed on).
     type Local: Clone + Send + Sync;
@@ -22,11 +22,11 @@ pub trait Sampler: Sync {
     fn evals(&self) -> Self::Evals;
     /// The field over the whole region.
     fn root(&self) -> Self::Local;
-    /// An enclosure of f over the box. May be `ENTIRE` (e.g. when f may be NaN).
+    /// An enclosure of F over the box: `inf() >= 0` proves it empty, `sup() < 0` full.
     fn interval(&self, ev: &mut Self::Evals, local: &Self::Local, b: [Interval; 3]) -> Interval;
     /// The field narrowed to the box of the last `interval` call.
     fn narrow(&self, ev: &mut Self::Evals, local: &Self::Local) -> Self::Local;
-    /// f at many points.
+    /// F at many points.
     fn batch(
         &self,
         ev: &mut Self::Evals,
@@ -36,19 +36,20 @@ pub trait Sampler: Sync {
         zs: &[f64],
         out: &mut [f64],
     );
-    /// f and its gradient at a point: `[f, df/dx, df/dy, df/dz]`, possibly NaN.
+    /// F and its gradient at a point: `[F, dF/dx, dF/dy, dF/dz]`; the gradient may be NaN.
     fn grad(&self, ev: &mut Self::Evals, local: &Self::Local, p: [f64; 3]) -> [f64; 4];
 }
 
-/// A compiled tape as a [`Sampler`]: intervals prune, choices simplify.
+/// A model's tape clipped to the region, as a [`Sampler`]: intervals prune, choices
+/// simplify.
 pub struct TapeSampler {
-    tape: Tape,
+    field: ClippedField,
 }
 
 impl TapeSampler {
-    /// Wraps a tape.
-    pub fn new(tape: Tape) -> Self {
-        TapeSampler { tape }
+    /// Wraps a clipped field.
+    pub fn new(field: ClippedField) -> Self {
+        TapeSampler { field }
     }
 }
 
@@ -60,7 +61,7 @@ pub struct TapeEvals {
 }
 
 impl Sampler for TapeSampler {
-    type Local = Tape;
+    type Local = ClippedField;
     type Evals = TapeEvals;
     fn evals(&self) -> TapeEvals {
         TapeEvals {
@@ -69,92 +70,29 @@ impl Sampler for TapeSampler {
             grad: GradEval::new(),
         }
     }
-    fn root(&self) -> Tape {
-        self.tape.clone()
+    fn root(&self) -> ClippedField {
+        self.field.clone()
     }
-    fn interval(&self, ev: &mut TapeEvals, local: &Tape, b: [Interval; 3]) -> Interval {
-        ev.interval.eval(local, b)
+    fn interval(&self, ev: &mut TapeEvals, local: &ClippedField, b: [Interval; 3]) -> Interval {
+        local.interval(&mut ev.interval, b)
     }
-    fn narrow(&self, ev: &mut TapeEvals, local: &Tape) -> Tape {
-        let choices = ev.interval.choices();
-        // Simplifying costs a pass over the tape; skip it when nothing was decided.
-        if choices.iter().all(|c| *c == Choice::Both) {
-            local.clone()
-        } else {
-            local.simplify(choices)
-        }
+    fn narrow(&self, ev: &mut TapeEvals, local: &ClippedField) -> ClippedField {
+        local.narrow(&ev.interval)
     }
     fn batch(
         &self,
         ev: &mut TapeEvals,
-        local: &Tape,
+        local: &ClippedField,
         xs: &[f64],
         ys: &[f64],
         zs: &[f64],
         out: &mut [f64],
     ) {
-        ev.batch.eval(local, xs, ys, zs, out);
+        local.batch(&mut ev.batch, xs, ys, zs, out);
     }
-    fn grad(&self, ev: &mut TapeEvals, local: &Tape, p: [f64; 3]) -> [f64; 4] {
-        let g = ev.grad.eval(local, p);
+    fn grad(&self, ev: &mut TapeEvals, local: &ClippedField, p: [f64; 3]) -> [f64; 4] {
+        let g = local.grad(&mut ev.grad, p);
         [g.v, g.d[0], g.d[1], g.d[2]]
-    }
-}
-
-/// The region: distance-like function positive outside the box, and the combination
-/// F = max(f, d_box) with NaN counted as outside.
-#[derive(Clone, Copy, Debug)]
-pub struct Clip {
-    /// The box.
-    pub bounds: Bounds,
-}
-
-impl Clip {
-    /// max over axes of (min − p, p − max): negative inside, zero on the box, positive out.
-    pub fn dist(&self, p: [f64; 3]) -> f64 {
-        let mut d = f64::NEG_INFINITY;
-        for (i, &c) in p.iter().enumerate() {
-            d = d.max(self.bounds.min[i] - c).max(c - self.bounds.max[i]);
-        }
-        d
-    }
-
-    /// The axis and sign of `dist`'s gradient at `p` (the face it measures to).
-    pub fn normal(&self, p: [f64; 3]) -> [f64; 3] {
-        let mut best = (f64::NEG_INFINITY, 0, 0.0);
-        for (i, &c) in p.iter().enumerate() {
-            let lo = self.bounds.min[i] - c;
-            let hi = c - self.bounds.max[i];
-            if lo > best.0 {
-                best = (lo, i, -1.0);
-            }
-            if hi > best.0 {
-                best = (hi, i, 1.0);
-            }
-        }
-        let mut n = [0.0; 3];
-        n[best.1] = best.2;
-        n
-    }
-
-    /// An enclosure of `dist` over a box.
-    pub fn interval(&self, b: [Interval; 3]) -> (f64, f64) {
-        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-        for (i, iv) in b.iter().enumerate() {
-            // min − p over [inf, sup] is [min − sup, min − inf]; p − max likewise.
-            lo = lo
-                .max(self.bounds.min[i] - iv.sup())
-                .max(iv.inf() - self.bounds.max[i]);
-            hi = hi
-                .max(self.bounds.min[i] - iv.inf())
-                .max(iv.sup() - self.bounds.max[i]);
-        }
-        (lo, hi)
-    }
-
-    /// F from f and the point's box distance; NaN becomes +∞ (outside).
-    pub fn combine(f: f64, d: f64) -> f64 {
-        if f.is_nan() { f64::INFINITY } else { f.max(d) }
     }
 }
 

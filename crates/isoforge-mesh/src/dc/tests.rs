@@ -1,24 +1,25 @@
 //! Mesher tests on plain closures (no tape needed): every corner sign pattern of a cell and
 //! of a pair of cells, across block boundaries, with and without NaN; shapes that break
-//! meshers. Each mesh is checked by an independent edge/vertex-link checker.
+//! meshers. Each mesh is checked by the crate's checker.
 
-use std::collections::HashMap;
-
-use isoforge_field::Bounds;
-use isoforge_field::Interval;
+use isoforge_field::{Bounds, Grad, Interval, clip_grad, clip_interval, clip_value};
 
 use super::sampler::Sampler;
-use super::{MeshSettings, mesh_sampler, mesh_sampler_blocks};
+use super::{MeshSettings, mesh_sampler_blocks, octree};
+use crate::check::check;
 use crate::mesh::Mesh;
 
 type IntervalFn = Box<dyn Fn([Interval; 3]) -> Interval + Sync>;
 
-/// A field from closures; intervals are `ENTIRE` unless given, normals come from the
-/// mesher's finite-difference fallback unless `grad` is set.
+/// A field from closures, clipped to the region by the same rules a tape is
+/// (`isoforge_field::clip_*`); intervals are `ENTIRE` unless given, normals come from the
+/// mesher's finite-difference fallback unless `nan_grad` is unset.
 pub struct FnSampler<F: Fn([f64; 3]) -> f64 + Sync> {
     pub f: F,
     pub interval: Option<IntervalFn>,
     pub nan_grad: bool,
+    /// The region; [`mesh_fn`] sets it from the settings.
+    pub bounds: Bounds,
 }
 
 impl<F: Fn([f64; 3]) -> f64 + Sync> FnSampler<F> {
@@ -27,31 +28,18 @@ impl<F: Fn([f64; 3]) -> f64 + Sync> FnSampler<F> {
             f,
             interval: None,
             nan_grad: true,
+            bounds: Bounds::new([0.0; 3], [1.0; 3]).expect("unit box"),
         }
     }
-}
 
-impl<F: Fn([f64; 3]) -> f64 + Sync> Sampler for FnSampler<F> {
-    type Local = ();
-    type Evals = ();
-    fn evals(&self) {}
-    fn root(&self) {}
-    fn interval(&self, _: &mut (), _: &(), b: [Interval; 3]) -> Interval {
-        match &self.interval {
-            Some(i) => i(b),
-            None => Interval::ENTIRE,
-        }
-    }
-    fn narrow(&self, _: &mut (), _: &()) {}
-    fn batch(&self, _: &mut (), _: &(), xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
-        for i in 0..out.len() {
-            out[i] = (self.f)([xs[i], ys[i], zs[i]]);
-        }
-    }
-    fn grad(&self, _: &mut (), _: &(), p: [f64; 3]) -> [f64; 4] {
+    /// The unclipped gradient: NaN unless asked for, else central differences.
+    fn raw_grad(&self, p: [f64; 3]) -> Grad {
         let v = (self.f)(p);
         if self.nan_grad {
-            return [v, f64::NAN, f64::NAN, f64::NAN];
+            return Grad {
+                v,
+                d: [f64::NAN; 3],
+            };
         }
         let h = 1e-6;
         let d = [0, 1, 2].map(|a| {
@@ -60,31 +48,63 @@ impl<F: Fn([f64; 3]) -> f64 + Sync> Sampler for FnSampler<F> {
             r[a] -= h;
             ((self.f)(q) - (self.f)(r)) / (2.0 * h)
         });
-        [v, d[0], d[1], d[2]]
+        Grad { v, d }
     }
 }
 
-/// Closed: every directed edge once, with its reverse once. Manifold: every vertex's
-/// triangles form one cycle. Oriented: follows from the first. Returns the volume.
-pub fn assert_closed_manifold(mesh: &Mesh, what: &str) -> f64 {
-    let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
-    for t in &mesh.triangles {
-        assert!(
-            t[0] != t[1] && t[1] != t[2] && t[0] != t[2],
-            "{what}: triangle repeats a vertex {t:?}"
-        );
-        for k in 0..3 {
-            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+/// Meshes a closure field over the settings' region.
+fn mesh_fn<F: Fn([f64; 3]) -> f64 + Sync>(s: FnSampler<F>, settings: &MeshSettings) -> Mesh {
+    mesh_fn_blocks(s, settings, octree::BLOCK_SHIFT)
+}
+
+/// Meshes a closure field with blocks of 2^`block_shift` cells.
+fn mesh_fn_blocks<F: Fn([f64; 3]) -> f64 + Sync>(
+    mut s: FnSampler<F>,
+    settings: &MeshSettings,
+    block_shift: u32,
+) -> Mesh {
+    s.bounds = settings.bounds;
+    mesh_sampler_blocks(&s, settings, block_shift)
+}
+
+impl<F: Fn([f64; 3]) -> f64 + Sync> Sampler for FnSampler<F> {
+    type Local = ();
+    type Evals = ();
+    fn evals(&self) {}
+    fn root(&self) {}
+    fn interval(&self, _: &mut (), _: &(), b: [Interval; 3]) -> Interval {
+        let f = match &self.interval {
+            Some(i) => i(b),
+            None => Interval::ENTIRE,
+        };
+        clip_interval(&self.bounds, f, false, b)
+    }
+    fn narrow(&self, _: &mut (), _: &()) {}
+    fn batch(&self, _: &mut (), _: &(), xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        for i in 0..out.len() {
+            let p = [xs[i], ys[i], zs[i]];
+            out[i] = clip_value(&self.bounds, (self.f)(p), p);
         }
     }
-    for (&(a, b), &n) in &directed {
-        assert_eq!(n, 1, "{what}: directed edge {a}->{b} used {n} times");
-        assert_eq!(
-            directed.get(&(b, a)).copied(),
-            Some(1),
-            "{what}: edge {a}-{b} has no opposite"
-        );
+    fn grad(&self, _: &mut (), _: &(), p: [f64; 3]) -> [f64; 4] {
+        let g = clip_grad(&self.bounds, self.raw_grad(p), p);
+        [g.v, g.d[0], g.d[1], g.d[2]]
     }
+}
+
+/// Checks the mesh with the crate's checker (closed, manifold, oriented; an empty mesh
+/// passes, callers say when they expect one) and that vertex positions are distinct.
+/// Returns the volume.
+pub fn assert_closed_manifold(mesh: &Mesh, what: &str) -> f64 {
+    if mesh.triangles.is_empty() {
+        return 0.0;
+    }
+    let report = check(mesh);
+    assert!(
+        report.is_closed_manifold(),
+        "{what}: {:?}",
+        report.problems()
+    );
     // STL has no shared vertices: readers weld by position, so positions must be distinct.
     let mut seen = std::collections::HashSet::new();
     for v in &mesh.vertices {
@@ -93,46 +113,7 @@ pub fn assert_closed_manifold(mesh: &Mesh, what: &str) -> f64 {
             "{what}: two vertices at {v:?}"
         );
     }
-    // Vertex links: the "next" map around each vertex must be a single cycle.
-    let mut around: HashMap<u32, HashMap<u32, u32>> = HashMap::new();
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (v, a, b) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            around.entry(v).or_default().insert(a, b);
-        }
-    }
-    for (v, next) in &around {
-        let Some((&start, _)) = next.iter().next() else {
-            continue;
-        };
-        let mut cur = start;
-        let mut steps = 0;
-        loop {
-            cur = next[&cur];
-            steps += 1;
-            if cur == start || steps > next.len() {
-                break;
-            }
-        }
-        assert_eq!(
-            steps,
-            next.len(),
-            "{what}: vertex {v} link is not one cycle"
-        );
-    }
-    volume(mesh)
-}
-
-pub fn volume(mesh: &Mesh) -> f64 {
-    mesh.triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| mesh.vertices[i as usize].map(f64::from));
-            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                + a[2] * (b[0] * c[1] - b[1] * c[0]))
-                / 6.0
-        })
-        .sum()
+    report.volume
 }
 
 fn settings(min: f64, max: f64, depth: u8) -> MeshSettings {
@@ -173,7 +154,7 @@ fn mesh_lattice(corners: &[([usize; 3], f64)], nan_grad: bool) -> Mesh {
     let mut s = FnSampler::new(move |p| trilinear(&values, p));
     s.nan_grad = nan_grad;
     // Blocks of 8 cells, so that the cells at 7..9 straddle block boundaries.
-    mesh_sampler_blocks(&s, &settings(0.0, 16.0, 4), 3)
+    mesh_fn_blocks(s, &settings(0.0, 16.0, 4), 3)
 }
 
 fn corner_value(inside: bool, c: usize) -> f64 {
@@ -268,7 +249,7 @@ fn sphere_volume_and_pruning() {
         let mut s = FnSampler::new(|p: [f64; 3]| p[0] * p[0] + p[1] * p[1] + p[2] * p[2] - 1.0);
         s.interval = Some(Box::new(sphere_interval));
         s.nan_grad = false;
-        let mesh = mesh_sampler(&s, &settings(-1.5, 1.5, depth));
+        let mesh = mesh_fn(s, &settings(-1.5, 1.5, depth));
         let vol = assert_closed_manifold(&mesh, &format!("sphere depth {depth}"));
         let exact = 4.0 / 3.0 * std::f64::consts::PI;
         let tol = if depth >= 6 { 0.02 } else { 0.15 };
@@ -288,7 +269,7 @@ fn model_larger_than_region_is_capped() {
     // A sphere of radius 2 in [-1, 1]³: the result is the cube, capped on all six sides.
     let mut s = FnSampler::new(|p: [f64; 3]| p[0] * p[0] + p[1] * p[1] + p[2] * p[2] - 4.0);
     s.nan_grad = false;
-    let mesh = mesh_sampler(&s, &settings(-1.0, 1.0, 5));
+    let mesh = mesh_fn(s, &settings(-1.0, 1.0, 5));
     let vol = assert_closed_manifold(&mesh, "capped");
     assert!((vol - 8.0).abs() < 0.01, "{vol}");
 }
@@ -297,11 +278,11 @@ fn model_larger_than_region_is_capped() {
 fn thin_plate_and_touching_spheres() {
     // A plate 0.01 thick in cells of 0.1: no corner is inside, so nothing (but valid).
     let s = FnSampler::new(|p: [f64; 3]| p[2].abs() - 0.005 + 0.0 * p[0]);
-    let mesh = mesh_sampler(&s, &settings(-1.0, 1.0, 4));
+    let mesh = mesh_fn(s, &settings(-1.0, 1.0, 4));
     assert_closed_manifold(&mesh, "thin plate");
     // A plate 0.15 thick with its faces between lattice planes, tilted.
     let s = FnSampler::new(|p: [f64; 3]| (p[2] + 0.3 * p[0]).abs() - 0.07);
-    let mesh = mesh_sampler(&s, &settings(-1.0, 1.0, 5));
+    let mesh = mesh_fn(s, &settings(-1.0, 1.0, 5));
     let vol = assert_closed_manifold(&mesh, "tilted plate");
     assert!(vol > 0.0);
     // Two spheres touching at the origin (a lattice corner and a non-corner).
@@ -311,7 +292,7 @@ fn thin_plate_and_touching_spheres() {
             let b = (p[0] + 0.5 - shift).powi(2) + p[1].powi(2) + p[2].powi(2) - 0.25;
             a.min(b)
         });
-        let mesh = mesh_sampler(&s, &settings(-1.0, 1.0, 5));
+        let mesh = mesh_fn(s, &settings(-1.0, 1.0, 5));
         assert_closed_manifold(&mesh, "touching spheres");
     }
 }
@@ -320,7 +301,7 @@ fn thin_plate_and_touching_spheres() {
 fn nan_half_space_and_cone_through_axis() {
     // sqrt(x) − 0.5 is NaN for x < 0 (outside there): a slab 0 ≤ x < 0.25, capped.
     let s = FnSampler::new(|p: [f64; 3]| p[0].sqrt() - 0.5);
-    let mesh = mesh_sampler(&s, &settings(-1.0, 1.0, 5));
+    let mesh = mesh_fn(s, &settings(-1.0, 1.0, 5));
     let vol = assert_closed_manifold(&mesh, "sqrt(x)");
     assert!((vol - 1.0).abs() < 0.15, "{vol}");
     // sqrt(x²+y²) − (1 − |z|)/2: a double cone, gradient undefined on the z axis.
@@ -328,7 +309,7 @@ fn nan_half_space_and_cone_through_axis() {
         FnSampler::new(|p: [f64; 3]| (p[0] * p[0] + p[1] * p[1]).sqrt() - (1.0 - p[2].abs()) / 2.0);
     let mut s2 = s;
     s2.nan_grad = false;
-    let mesh = mesh_sampler(&s2, &settings(-1.0, 1.0, 5));
+    let mesh = mesh_fn(s2, &settings(-1.0, 1.0, 5));
     assert_closed_manifold(&mesh, "double cone");
 }
 
@@ -342,7 +323,7 @@ fn gyroid_sphere_is_closed_manifold() {
     for (depth, lo, hi) in [(5u8, 0.2, 1.0), (7, 0.79, 0.84)] {
         let mut s = FnSampler::new(gyroid);
         s.nan_grad = false;
-        let mesh = mesh_sampler(&s, &settings(-1.5, 1.5, depth));
+        let mesh = mesh_fn(s, &settings(-1.5, 1.5, depth));
         let vol = assert_closed_manifold(&mesh, &format!("gyroid depth {depth}"));
         // The sheet is about one cell thick at depth 5: a thinner volume is expected there;
         // the reference (finest meshes) is 0.817.

@@ -1,5 +1,8 @@
 //! Layer outlines straight from the field.
 //!
+//! The field is the model clipped to its region ([`ClippedField`]: outside the box and
+//! NaN count as outside, as when meshing), so a model cut by its region is capped.
+//!
 //! At a layer's height a quadtree over the plane is pruned by interval evaluation: a cell
 //! whose interval is all positive is empty, all negative is full, and only cells that may
 //! hold the surface are split, down to the finest cell size. Each split evaluates its
@@ -12,7 +15,7 @@
 
 use std::collections::HashMap;
 
-use isoforge_field::{Bounds, Interval, IntervalEval, PointEval, Shape, Tape};
+use isoforge_field::{Bounds, ClippedField, Interval, IntervalEval, PointEval, Shape};
 
 use crate::geom::{Contour, Point, simplify_closed};
 use crate::outline::march::{EdgeKey, cell_segments, chain, edge_corners};
@@ -23,8 +26,7 @@ const BISECTION_STEPS: usize = 12;
 /// Slices a field into layer outlines.
 #[derive(Clone)]
 pub struct FieldSlicer {
-    tape: Tape,
-    bounds: Bounds,
+    field: ClippedField,
     /// The finest quadtree cell, mm.
     cell: f64,
     /// Douglas-Peucker tolerance, mm.
@@ -34,11 +36,11 @@ pub struct FieldSlicer {
     cells: i32,
 }
 
-/// A finest cell that may hold surface, with the tape simplified for it.
+/// A finest cell that may hold surface, with the field simplified for it.
 struct Leaf {
     i: i32,
     j: i32,
-    tape: Tape,
+    field: ClippedField,
 }
 
 impl FieldSlicer {
@@ -57,8 +59,7 @@ impl FieldSlicer {
         let need = ((size[0].max(size[1]) / cell).ceil() as i64 + 2).clamp(1, 1 << 24);
         let cells = (need as u64).next_power_of_two() as i32;
         FieldSlicer {
-            tape: Tape::new(shape),
-            bounds,
+            field: ClippedField::new(shape, bounds),
             cell,
             tolerance: tolerance.max(0.0),
             origin: [bounds.min[0] - cell, bounds.min[1] - cell],
@@ -66,14 +67,14 @@ impl FieldSlicer {
         }
     }
 
-    /// The compiled field.
-    pub fn tape(&self) -> &Tape {
-        &self.tape
+    /// The model clipped to its region.
+    pub fn field(&self) -> &ClippedField {
+        &self.field
     }
 
     /// The region the field is sliced over.
     pub fn bounds(&self) -> Bounds {
-        self.bounds
+        *self.field.bounds()
     }
 
     fn corner(&self, i: i32, j: i32) -> Point {
@@ -83,78 +84,59 @@ impl FieldSlicer {
         ]
     }
 
-    fn in_bounds(&self, p: Point) -> bool {
-        let b = &self.bounds;
-        p[0] >= b.min[0] && p[0] <= b.max[0] && p[1] >= b.min[1] && p[1] <= b.max[1]
+    /// Inside: in the region and the model strictly negative; NaN counts as outside.
+    fn inside(&self, ev: &mut PointEval, field: &ClippedField, p: Point, z: f64) -> bool {
+        field.is_inside(ev, [p[0], p[1], z])
     }
 
-    /// Inside means in the bounds and strictly negative; NaN counts as outside.
-    fn inside(&self, ev: &mut PointEval, tape: &Tape, p: Point, z: f64) -> bool {
-        self.in_bounds(p) && ev.eval(tape, [p[0], p[1], z]) < 0.0
-    }
-
-    /// The interval of the field over cells (i0, j0) .. (i0 + n, j0 + n) at `z`, clipped to
-    /// the bounds; `None` when the square misses the bounds. The flag says whether the
-    /// square lies wholly within the bounds.
+    /// An enclosure of the clipped field over cells (i0, j0) .. (i0 + n, j0 + n) at `z`:
+    /// `inf() >= 0` means nothing there is inside, `sup() < 0` that all of it is.
     fn square_interval(
         &self,
         ev: &mut IntervalEval,
-        tape: &Tape,
-        i0: i32,
-        j0: i32,
-        n: i32,
+        field: &ClippedField,
+        (i0, j0, n): (i32, i32, i32),
         z: Interval,
-    ) -> Option<(Interval, bool)> {
+    ) -> Interval {
         let lo = self.corner(i0, j0);
         let hi = self.corner(i0 + n, j0 + n);
-        let b = &self.bounds;
-        let x = (lo[0].max(b.min[0]), hi[0].min(b.max[0]));
-        let y = (lo[1].max(b.min[1]), hi[1].min(b.max[1]));
-        if x.0 > x.1 || y.0 > y.1 {
-            return None;
-        }
-        let within =
-            lo[0] >= b.min[0] && hi[0] <= b.max[0] && lo[1] >= b.min[1] && hi[1] <= b.max[1];
-        let xi = Interval::try_from(x).ok()?;
-        let yi = Interval::try_from(y).ok()?;
-        Some((ev.eval(tape, [xi, yi, z]), within))
+        let span = |a: f64, b: f64| Interval::try_from((a, b)).unwrap_or(Interval::ENTIRE);
+        field.interval(ev, [span(lo[0], hi[0]), span(lo[1], hi[1]), z])
     }
 
-    /// The tape simplified for the slab `z0..z1` over the whole region.
-    fn slab_tape(&self, ev: &mut IntervalEval, z0: f64, z1: f64) -> Option<Tape> {
+    /// The field simplified for the slab `z0..z1` over the whole region; `None` when the
+    /// slab is provably empty.
+    fn slab_field(&self, ev: &mut IntervalEval, z0: f64, z1: f64) -> Option<ClippedField> {
         let (lo, hi) = (z0.min(z1), z0.max(z1));
         let zi = Interval::try_from((lo, hi)).unwrap_or(Interval::ENTIRE);
-        let (r, _) = self.square_interval(ev, &self.tape, 0, 0, self.cells, zi)?;
+        let r = self.square_interval(ev, &self.field, (0, 0, self.cells), zi);
         if r.inf() >= 0.0 {
-            // Provably empty slab (an interval with NaN is ENTIRE, never here).
             return None;
         }
-        Some(self.tape.simplify(ev.choices()))
+        Some(self.field.narrow(ev))
     }
 
     fn collect_leaves(
         &self,
         ev: &mut IntervalEval,
-        tape: &Tape,
+        field: &ClippedField,
         (i0, j0, n): (i32, i32, i32),
         z: Interval,
         out: &mut Vec<Leaf>,
     ) {
-        let Some((r, within)) = self.square_interval(ev, tape, i0, j0, n, z) else {
-            return;
-        };
-        if r.inf() >= 0.0 || (within && r.sup() < 0.0) {
+        let r = self.square_interval(ev, field, (i0, j0, n), z);
+        if r.inf() >= 0.0 || r.sup() < 0.0 {
             return;
         }
         if n == 1 {
             out.push(Leaf {
                 i: i0,
                 j: j0,
-                tape: tape.clone(),
+                field: field.clone(),
             });
             return;
         }
-        let child = tape.simplify(ev.choices());
+        let child = field.narrow(ev);
         let h = n / 2;
         for (di, dj) in [(0, 0), (h, 0), (0, h), (h, h)] {
             self.collect_leaves(ev, &child, (i0 + di, j0 + dj, h), z, out);
@@ -166,12 +148,12 @@ impl FieldSlicer {
     pub fn outline(&self, z: f64, slab: (f64, f64)) -> Vec<Contour> {
         let mut iev = IntervalEval::new();
         let mut pev = PointEval::new();
-        let Some(tape) = self.slab_tape(&mut iev, slab.0.min(z), slab.1.max(z)) else {
+        let Some(field) = self.slab_field(&mut iev, slab.0.min(z), slab.1.max(z)) else {
             return Vec::new();
         };
         let zi = Interval::try_from((z, z)).unwrap_or(Interval::ENTIRE);
         let mut leaves = Vec::new();
-        self.collect_leaves(&mut iev, &tape, (0, 0, self.cells), zi, &mut leaves);
+        self.collect_leaves(&mut iev, &field, (0, 0, self.cells), zi, &mut leaves);
 
         let mut corners: HashMap<(i32, i32), bool> = HashMap::with_capacity(leaves.len() * 2);
         let mut segments: Vec<(EdgeKey, EdgeKey)> = Vec::with_capacity(leaves.len());
@@ -181,7 +163,7 @@ impl FieldSlicer {
             let cs = [(0, 0), (1, 0), (1, 1), (0, 1)].map(|(di, dj)| {
                 let key = (leaf.i + di, leaf.j + dj);
                 *corners.entry(key).or_insert_with(|| {
-                    self.inside(&mut pev, &leaf.tape, self.corner(key.0, key.1), z)
+                    self.inside(&mut pev, &leaf.field, self.corner(key.0, key.1), z)
                 })
             });
             let before = segments.len();
@@ -194,7 +176,7 @@ impl FieldSlicer {
                 leaf.i,
                 leaf.j,
                 cs,
-                || self.inside(pev_ref, &leaf.tape, center, z),
+                || self.inside(pev_ref, &leaf.field, center, z),
                 &mut segments,
             );
             for s in &segments[before..] {
@@ -205,7 +187,7 @@ impl FieldSlicer {
 
         let mut points: HashMap<EdgeKey, Point> = HashMap::with_capacity(edge_tape.len());
         for (&e, &k) in &edge_tape {
-            points.insert(e, self.refine(&mut pev, &leaves[k].tape, e, &corners, z));
+            points.insert(e, self.refine(&mut pev, &leaves[k].field, e, &corners, z));
         }
         let mut out = Vec::new();
         for ch in chain(&segments) {
@@ -230,7 +212,7 @@ impl FieldSlicer {
     fn refine(
         &self,
         ev: &mut PointEval,
-        tape: &Tape,
+        field: &ClippedField,
         e: EdgeKey,
         corners: &HashMap<(i32, i32), bool>,
         z: f64,
@@ -241,7 +223,7 @@ impl FieldSlicer {
         let (mut lo, mut hi) = if a_in { (pa, pb) } else { (pb, pa) };
         for _ in 0..BISECTION_STEPS {
             let mid = [(lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5];
-            if self.inside(ev, tape, mid, z) {
+            if self.inside(ev, field, mid, z) {
                 lo = mid;
             } else {
                 hi = mid;
@@ -255,28 +237,19 @@ impl FieldSlicer {
         let mut iev = IntervalEval::new();
         let mut pev = PointEval::new();
         let zi = Interval::try_from((z, z)).unwrap_or(Interval::ENTIRE);
-        self.search(
-            &mut iev,
-            &mut pev,
-            &self.tape.clone(),
-            (0, 0, self.cells),
-            z,
-            zi,
-        )
+        self.search(&mut iev, &mut pev, &self.field, (0, 0, self.cells), z, zi)
     }
 
     fn search(
         &self,
         iev: &mut IntervalEval,
         pev: &mut PointEval,
-        tape: &Tape,
+        field: &ClippedField,
         (i0, j0, n): (i32, i32, i32),
         z: f64,
         zi: Interval,
     ) -> bool {
-        let Some((r, _)) = self.square_interval(iev, tape, i0, j0, n, zi) else {
-            return false;
-        };
+        let r = self.square_interval(iev, field, (i0, j0, n), zi);
         if r.inf() >= 0.0 {
             return false;
         }
@@ -288,10 +261,10 @@ impl FieldSlicer {
             let pts = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.5, 0.5]];
             return pts.iter().any(|d| {
                 let p = [c[0] + d[0] * self.cell, c[1] + d[1] * self.cell];
-                self.inside(pev, tape, p, z)
+                self.inside(pev, field, p, z)
             });
         }
-        let child = tape.simplify(iev.choices());
+        let child = field.narrow(iev);
         let h = n / 2;
         [(0, 0), (h, 0), (0, h), (h, h)]
             .into_iter()
@@ -302,7 +275,8 @@ impl FieldSlicer {
     /// found by scanning in steps of `step` mm and bisecting the first hit from each end.
     /// `None` for an empty model.
     pub fn z_extent(&self, step: f64) -> Option<(f64, f64)> {
-        let (z0, z1) = (self.bounds.min[2], self.bounds.max[2]);
+        let b = self.bounds();
+        let (z0, z1) = (b.min[2], b.max[2]);
         let step = if step > 0.0 { step } else { (z1 - z0) / 1000.0 };
         let n = ((z1 - z0) / step).ceil().max(1.0) as usize;
         let at = |k: usize| (z0 + k as f64 * step).min(z1);

@@ -23,16 +23,8 @@ pub struct MeshSlicer<'a> {
 
 /// The mesh's bounding box, `(min, max)`, or `None` for no vertices.
 pub fn mesh_bounds(mesh: &Mesh) -> Option<([f64; 3], [f64; 3])> {
-    let first = mesh.vertices.first()?;
-    let mut lo = first.map(f64::from);
-    let mut hi = lo;
-    for v in &mesh.vertices {
-        for k in 0..3 {
-            lo[k] = lo[k].min(v[k] as f64);
-            hi[k] = hi[k].max(v[k] as f64);
-        }
-    }
-    Some((lo, hi))
+    let [lo, hi] = mesh.bounds()?;
+    Some((lo.map(f64::from), hi.map(f64::from)))
 }
 
 fn at(mesh: &Mesh, v: u32) -> [f64; 3] {
@@ -94,16 +86,7 @@ pub fn check_sliceable(mesh: &Mesh) -> Result<(), SliceError> {
             p[2]
         )));
     }
-    let volume: f64 = mesh
-        .triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|v| at(mesh, v));
-            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                + a[2] * (b[0] * c[1] - b[1] * c[0]))
-                / 6.0
-        })
-        .sum();
+    let volume = mesh.signed_volume();
     if volume < 0.0 {
         return Err(SliceError::Mesh(format!(
             "the mesh is inside out (its volume is {volume:.3} mm³: triangles wind clockwise \

@@ -1,5 +1,8 @@
 //! Finding a model's region by interval pruning, and proving a region empty.
 //!
+//! Both search the model clipped to a box ([`ClippedField`]), so NaN counts as outside
+//! here exactly as it does when meshing, slicing and rendering.
+//!
 //! Starting from a large box, cells whose interval is all positive are dropped and the rest
 //! are split, level by level (an octree that only descends where the model may be). Cells
 //! whose interval is all negative are inside the model and need no splitting. The bounding
@@ -10,9 +13,49 @@
 //! inside points cannot widen the result and are dropped. What is left to split is the
 //! few cells at the model's six extremes, not its whole surface.
 
-use isoforge_field::{Bounds, Interval, IntervalEval, PointEval, Shape, Tape};
+use inari::Interval;
 
-use crate::ScriptError;
+use crate::bounds::Bounds;
+use crate::clip::ClippedField;
+use crate::eval::interval::IntervalEval;
+use crate::eval::point::PointEval;
+use crate::shape::Shape;
+use crate::tape::Tape;
+
+/// Why no region could be found or used.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RegionError {
+    /// Nothing within the search box may be inside the model.
+    #[error("the model is empty: no point within ±{half_side} mm of the origin is inside it")]
+    Empty {
+        /// Half the side of the box searched, mm ([`SEARCH_HALF_SIDE`]).
+        half_side: f64,
+    },
+    /// What may be inside reaches the search box's faces: the model needs a region given.
+    #[error("the model is not bounded: it reaches ±{half_side} mm from the origin")]
+    Unbounded {
+        /// Half the side of the box searched, mm ([`SEARCH_HALF_SIDE`]).
+        half_side: f64,
+    },
+    /// The box found has a side of zero length (or is not finite).
+    #[error("the model's region came out degenerate: {min:?} to {max:?}")]
+    Degenerate {
+        /// The lowest corner found.
+        min: [f64; 3],
+        /// The highest corner found.
+        max: [f64; 3],
+    },
+    /// The region given holds nothing of the model.
+    #[error(
+        "the model is empty in its region {:?} to {:?}: nothing there is inside it",
+        region.min,
+        region.max
+    )]
+    EmptyRegion {
+        /// The region.
+        region: Bounds,
+    },
+}
 
 /// Half the side of the box the search starts from, in millimetres.
 pub const SEARCH_HALF_SIDE: f64 = 1e4;
@@ -39,8 +82,8 @@ fn interval(lo: f64, hi: f64) -> Interval {
     Interval::try_from((lo, hi)).unwrap_or(Interval::ENTIRE)
 }
 
-fn eval(ev: &mut IntervalEval, tape: &Tape, (lo, hi): &Cell) -> Interval {
-    ev.eval(tape, [0, 1, 2].map(|i| interval(lo[i], hi[i])))
+fn eval(ev: &mut IntervalEval, field: &ClippedField, (lo, hi): &Cell) -> Interval {
+    field.interval(ev, [0, 1, 2].map(|i| interval(lo[i], hi[i])))
 }
 
 fn children((lo, hi): &Cell) -> impl Iterator<Item = Cell> + '_ {
@@ -89,7 +132,7 @@ impl Pruned {
 
 /// The evaluators pruning runs.
 struct Evals<'a> {
-    tape: &'a Tape,
+    field: &'a ClippedField,
     interval: IntervalEval,
     point: PointEval,
 }
@@ -107,7 +150,7 @@ fn refine(ev: &mut Evals, p: Pruned) -> Pruned {
     };
     for cell in &p.ambiguous {
         for child in children(cell) {
-            let v = eval(&mut ev.interval, ev.tape, &child);
+            let v = eval(&mut ev.interval, ev.field, &child);
             if v.inf() > 0.0 {
                 continue;
             }
@@ -116,7 +159,7 @@ fn refine(ev: &mut Evals, p: Pruned) -> Pruned {
                 continue;
             }
             let centre = [0, 1, 2].map(|i| 0.5 * (child.0[i] + child.1[i]));
-            if ev.point.eval(ev.tape, centre) < 0.0 {
+            if ev.field.is_inside(&mut ev.point, centre) {
                 grow(&mut next.full, &(centre, centre));
             }
             next.ambiguous.push(child);
@@ -128,13 +171,21 @@ fn refine(ev: &mut Evals, p: Pruned) -> Pruned {
     next
 }
 
-fn prune(tape: &Tape, root: Cell, mut stop: impl FnMut(&Pruned, f64) -> bool) -> Pruned {
+/// Prunes the box `root` (which is also the clip box), level by level until `stop`.
+fn prune(tape: Tape, root: Cell, mut stop: impl FnMut(&Pruned, f64) -> bool) -> Pruned {
+    let Some(clip) = Bounds::new(root.0, root.1) else {
+        return Pruned {
+            ambiguous: vec![],
+            full: None,
+        };
+    };
+    let field = ClippedField::from_tape(tape, clip);
     let mut ev = Evals {
-        tape,
+        field: &field,
         interval: IntervalEval::new(),
         point: PointEval::new(),
     };
-    let v = eval(&mut ev.interval, tape, &root);
+    let v = eval(&mut ev.interval, &field, &root);
     let mut p = if v.inf() > 0.0 {
         Pruned {
             ambiguous: vec![],
@@ -164,37 +215,29 @@ fn prune(tape: &Tape, root: Cell, mut stop: impl FnMut(&Pruned, f64) -> bool) ->
 
 /// Finds a region enclosing the model by interval pruning of the box ±[`SEARCH_HALF_SIDE`].
 ///
-/// Errors: "the model is empty" when nothing of the search box may be inside, and "the
-/// model is not bounded" when what may be inside reaches the search box's faces.
-pub fn find_bounds(shape: &Shape) -> Result<Bounds, ScriptError> {
-    let tape = Tape::new(shape);
+/// The box found is padded on every side so that the surface does not lie on its faces.
+/// Errors: [`RegionError::Empty`] when nothing of the search box may be inside, and
+/// [`RegionError::Unbounded`] when what may be inside reaches the search box's faces.
+pub fn find_bounds(shape: &Shape) -> Result<Bounds, RegionError> {
     let h = SEARCH_HALF_SIDE;
     let root = ([-h; 3], [h; 3]);
-    let p = prune(&tape, root, |p, side| {
+    let p = prune(Tape::new(shape), root, |p, side| {
         p.bbox().is_some_and(|(lo, hi)| {
             let longest = (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
             side <= longest * TIGHTNESS
         })
     });
     let Some((lo, hi)) = p.bbox() else {
-        return Err(ScriptError(format!(
-            "the model is empty: no point within ±{h} mm of the origin is inside it"
-        )));
+        return Err(RegionError::Empty { half_side: h });
     };
     let touches = (0..3).any(|i| lo[i] <= -h || hi[i] >= h);
     if touches {
-        return Err(ScriptError(format!(
-            "the model is not bounded: it reaches ±{h} mm from the origin. Give it a region: \
-             bounds([x0, y0, z0], [x1, y1, z1]) in the script, or --bounds X0,Y0,Z0,X1,Y1,Z1"
-        )));
+        return Err(RegionError::Unbounded { half_side: h });
     }
     let longest = (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
     let pad = PADDING * longest;
-    Bounds::new(lo.map(|v| v - pad), hi.map(|v| v + pad)).ok_or_else(|| {
-        ScriptError(format!(
-            "the model's region came out degenerate: {lo:?} to {hi:?}"
-        ))
-    })
+    let (min, max) = (lo.map(|v| v - pad), hi.map(|v| v + pad));
+    Bounds::new(min, max).ok_or(RegionError::Degenerate { min, max })
 }
 
 /// Levels the emptiness check splits a region into (8^4 = 4096 cells at most).
@@ -203,22 +246,18 @@ const EMPTY_CHECK_LEVELS: usize = 4;
 /// True when interval arithmetic proves that no point of `region` is inside the model.
 /// False means "may not be empty" (intervals can be loose); it never wrongly says empty.
 pub fn region_is_empty(shape: &Shape, region: &Bounds) -> bool {
-    let tape = Tape::new(shape);
     let mut levels = 0;
-    let p = prune(&tape, (region.min, region.max), |_, _| {
+    let p = prune(Tape::new(shape), (region.min, region.max), |_, _| {
         levels += 1;
         levels > EMPTY_CHECK_LEVELS
     });
     p.ambiguous.is_empty() && p.full.is_none()
 }
 
-/// An error unless the model may have something inside `region`.
-pub fn ensure_not_empty(shape: &Shape, region: &Bounds) -> Result<(), ScriptError> {
+/// [`RegionError::EmptyRegion`] unless the model may have something inside `region`.
+pub fn ensure_not_empty(shape: &Shape, region: &Bounds) -> Result<(), RegionError> {
     if region_is_empty(shape, region) {
-        return Err(ScriptError(format!(
-            "the model is empty in its region {:?} to {:?}: nothing there is inside it",
-            region.min, region.max
-        )));
+        return Err(RegionError::EmptyRegion { region: *region });
     }
     Ok(())
 }
