@@ -1,7 +1,7 @@
 //! `isoforge render` end to end: a PNG of the right size that shows something, and no
 //! file at all when the model or the arguments are bad.
 
-use isoforge_tests::{fixtures, isoforge};
+use crate::{fixtures, isoforge};
 
 /// Decodes a PNG into (width, height, RGB bytes).
 fn decode(path: &std::path::Path) -> (u32, u32, Vec<u8>) {

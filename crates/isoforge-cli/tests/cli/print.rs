@@ -5,9 +5,9 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use crate::{fixtures, isoforge, isoforge_bin};
 use isoforge_host::gcode;
 use isoforge_host::journal::{self, JournalRecord};
-use isoforge_tests::{fixtures, isoforge, isoforge_bin};
 
 /// A running `isoforge fake-printer`, killed if the test ends early.
 struct FakeProcess {
