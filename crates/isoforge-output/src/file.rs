@@ -250,3 +250,9 @@ pub fn write_file(path: &Path, bytes: &[u8], options: Options<'_>) -> Result<(),
     }
     out.commit()
 }
+
+/// Checks that `path` could be written by the rules of [`OutputFile`] (for an output written
+/// later, or many times, like the print journal), leaving nothing behind.
+pub fn check_file(path: &Path, options: Options<'_>) -> Result<(), OutputError> {
+    OutputFile::prepare(path, options).map(drop)
+}

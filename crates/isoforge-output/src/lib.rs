@@ -43,7 +43,7 @@ mod registry;
 mod target;
 
 pub use error::OutputError;
-pub use file::{OutputFile, write_file};
+pub use file::{OutputFile, check_file, write_file};
 pub use folder::OutputFolder;
 pub use registry::{live_temp_files, remove_temp_files};
 

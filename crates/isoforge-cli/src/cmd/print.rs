@@ -3,7 +3,6 @@
 use std::io::{BufRead, IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::mpsc;
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
@@ -14,6 +13,8 @@ use isoforge_host::journal::{self, JournalRecord, Status};
 use isoforge_host::protocol::{Config, Event};
 use isoforge_host::state::MachineState;
 use isoforge_host::streamer::{self, Control, Job, Progress, Update};
+use isoforge_output::{Durability, Options, Streams, check_file};
+use signal_hook::consts::SIGINT;
 
 use crate::common::{Global, print_json};
 
@@ -87,6 +88,19 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
         .journal
         .clone()
         .unwrap_or_else(|| journal::default_path(&args.file));
+    if !args.no_journal {
+        // Before anything is sent: a journal that is the G-code itself (or a FIFO, a
+        // read-only file, a missing folder) is refused now, not at the first write.
+        check_file(
+            &journal_path,
+            Options {
+                inputs: &[&args.file],
+                durability: Durability::Sync,
+                streams: Streams::Refuse,
+            },
+        )
+        .context("the job journal")?;
+    }
 
     let (start, prelude, state) = if args.resume || args.from_layer.is_some() {
         let record = if args.resume && !args.no_journal {
@@ -136,13 +150,8 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
     };
 
     let control = Control::new();
-    let (tx, rx) = mpsc::channel::<()>();
-    if let Err(e) = ctrlc::set_handler(move || {
-        let _ = tx.send(());
-    }) && !global.quiet
-    {
-        eprintln!("warning: Ctrl-C will not pause the job: {e}");
-    }
+    // From here a signal must not just end the process: the printer would be left hot.
+    let signals = crate::signals::take();
 
     let bar = if global.chatty() {
         let bar = ProgressBar::new(program.commands.len() as u64);
@@ -186,11 +195,17 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
             })
         });
         while !worker.is_finished() {
-            if rx.recv_timeout(Duration::from_millis(100)).is_err() {
+            let Some(signal) = signals.recv_timeout(Duration::from_millis(100)) else {
                 continue;
-            }
-            if !interactive {
-                say(&bar, "interrupted: cancelling (heaters and motors off)");
+            };
+            // SIGTERM and SIGHUP (the terminal is gone) cancel at once, as Ctrl-C does
+            // without a terminal to ask on.
+            if signal != SIGINT || !interactive {
+                let name = crate::signals::name(signal);
+                say(
+                    &bar,
+                    &format!("interrupted by {name}: cancelling (heaters and motors off)"),
+                );
                 cancel(&control, args.emergency);
                 continue;
             }
