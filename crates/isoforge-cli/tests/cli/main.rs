@@ -8,6 +8,7 @@ mod check;
 mod help;
 mod info;
 mod mesh;
+mod outputs;
 mod print;
 mod render;
 mod slice;
