@@ -9,7 +9,7 @@
 //! `fake-printer` stops and writes its log. Signals are read on a thread of their own
 //! (signal-hook's iterator), so what they trigger is ordinary code, not a signal handler.
 
-use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::sync::mpsc::{self, Receiver, Sender};
 use std::sync::{Mutex, PoisonError};
 use std::time::Duration;
 
@@ -69,10 +69,7 @@ pub struct Taken {
 impl Taken {
     /// The next signal, if one comes within `timeout`.
     pub fn recv_timeout(&self, timeout: Duration) -> Option<i32> {
-        match self.receiver.recv_timeout(timeout) {
-            Ok(signal) => Some(signal),
-            Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => None,
-        }
+        self.receiver.recv_timeout(timeout).ok()
     }
 }
 
