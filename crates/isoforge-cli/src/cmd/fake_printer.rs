@@ -20,7 +20,7 @@ path on the first line of stdout; point `isoforge print --port PATH` (or any hos
 checks line numbers and checksums as Marlin does, has 4 command slots and a 128-byte receive \
 buffer (bytes beyond it are lost), answers `ok` after executing, heats with `echo:busy: \
 processing` during M109/M190, and reports temperatures (M105, M155). It serves until the host \
-disconnects or it is killed.\n\nExample:\n  isoforge fake-printer --faults corrupt=0.01,drop=0.005,seed=7 --log executed.tsv"
+disconnects or a signal (Ctrl-C, SIGTERM, SIGHUP) stops it; the --log file is written then, whole.\n\nExample:\n  isoforge fake-printer --faults corrupt=0.01,drop=0.005,seed=7 --log executed.tsv"
 )]
 pub struct FakePrinterArgs {
     /// Limit the link to this baud rate's byte speed (10 bits a byte); default: no limit.
@@ -34,7 +34,8 @@ pub struct FakePrinterArgs {
     /// seed=N. Example: corrupt=0.01,drop=0.005,reset-at=5000,seed=7
     #[arg(long, value_name = "SPEC")]
     pub faults: Option<String>,
-    /// Record every executed command to this file: `LINE<TAB>COMMAND` (`-` for unnumbered).
+    /// Record every executed command to this file: `LINE<TAB>COMMAND` (`-` for unnumbered),
+    /// written when the printer stops. An existing file that is not such a log is refused.
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
     /// Real seconds per simulated second of heating (heating runs at 40 °C a second).

@@ -29,7 +29,8 @@ count with ADVANCED_OK), resend requests answered from a history, busy and heati
 silence probed with M105 and reported, a board reset (`start`) or `Error:` stopping the job.\n\n\
 A progress bar shows percent, layer, Z, ETA and temperatures on a terminal. Ctrl-C pauses and asks \
 to resume or cancel (cancel stops sending, then heaters off M104 S0/M140 S0 and motors off M84; \
---emergency sends M112 instead); when stdin is not a terminal Ctrl-C cancels.\n\n\
+--emergency sends M112 instead); when stdin is not a terminal Ctrl-C cancels, and SIGTERM or SIGHUP \
+always cancel that way.\n\n\
 The journal (FILE.journal unless --journal) records the last acknowledged line durably. After a \
 crash, cable pull or reset, `--resume` re-heats to the last targets, restores G90/G91 and M82/M83, \
 sets E with G92, lifts, homes X and Y, returns to the last position and continues from the first \
