@@ -135,6 +135,20 @@ pub(crate) fn for_file(
     inputs: &[&Path],
     streams: Streams,
 ) -> Result<Target, OutputError> {
+    // A pipe or terminal reached through a magic link (`/dev/stdout`, `/proc/self/fd/1`)
+    // has no path of its own to follow to: let the kernel open it by the name given.
+    if let Ok(m) = fs::metadata(requested)
+        && (m.file_type().is_fifo() || m.file_type().is_char_device())
+        && streams == Streams::WriteThrough
+    {
+        refuse_inputs(requested, &m, inputs)?;
+        return Ok(Target {
+            requested: requested.to_path_buf(),
+            resolved: requested.to_path_buf(),
+            folder: folder_of(requested),
+            existing: Existing::Stream,
+        });
+    }
     let (path, meta) = resolve(requested)?;
     let folder = folder_of(&path);
     let existing = match &meta {

@@ -272,6 +272,28 @@ fn a_fifo_is_written_into_not_replaced() {
 }
 
 #[test]
+fn a_pipe_behind_a_magic_link_is_written_into() {
+    // /proc/PID/fd/0 of a `cat` reading a pipe links to "pipe:[N]", which is no path: the
+    // output must open the link itself, as it would /dev/stdout.
+    let mut cat = std::process::Command::new("cat")
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let link = PathBuf::from(format!("/proc/{}/fd/0", cat.id()));
+    write_file(&link, b"into the pipe", Options::default()).unwrap();
+    drop(cat.stdin.take());
+    let mut got = String::new();
+    cat.stdout
+        .take()
+        .unwrap()
+        .read_to_string(&mut got)
+        .unwrap();
+    cat.wait().unwrap();
+    assert_eq!(got, "into the pipe");
+}
+
+#[test]
 fn durable_writes_replace_like_the_others() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("job.journal");
