@@ -284,11 +284,7 @@ fn a_pipe_behind_a_magic_link_is_written_into() {
     write_file(&link, b"into the pipe", Options::default()).unwrap();
     drop(cat.stdin.take());
     let mut got = String::new();
-    cat.stdout
-        .take()
-        .unwrap()
-        .read_to_string(&mut got)
-        .unwrap();
+    cat.stdout.take().unwrap().read_to_string(&mut got).unwrap();
     cat.wait().unwrap();
     assert_eq!(got, "into the pipe");
 }
