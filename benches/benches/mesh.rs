@@ -1,7 +1,7 @@
 //! Meshing time for the six benchmark scripts at depths 8 and 9, and the colonnade `.vm`
-//! model at depth 8 over [-1, 1]³: the figures compared with fidget in
-//! `fixtures/bench` (see `../shared/models/README.md`). Quick subset: `cargo bench --bench
-//! mesh -- d8`.
+//! model at depth 8 over [-1, 1]³: the figures compared with fidget (the models are in
+//! `fixtures/bench`; docs/contributing.md says how to run and compare). Quick subset:
+//! `cargo bench --bench mesh -- d8`.
 
 use std::path::PathBuf;
 

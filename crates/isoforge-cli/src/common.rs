@@ -1,7 +1,7 @@
-//! What every subcommand shares: global flags, model loading, atomic output, progress bars.
+//! What every subcommand shares: global flags, model loading, progress bars, JSON output.
 
 use std::io::{IsTerminal, Write};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context as _, Result, bail};
 use clap::Args;
@@ -106,21 +106,6 @@ pub fn parse_bounds(text: &str) -> Result<Bounds> {
     }
     Bounds::new([nums[0], nums[1], nums[2]], [nums[3], nums[4], nums[5]])
         .with_context(|| format!("--bounds {text:?}: each minimum must be below its maximum"))
-}
-
-/// Writes a file whole or not at all: into a temporary file beside it, then renamed.
-pub fn write_atomic(path: &Path, write: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
-    let mut tmp = isoforge_mesh::io::temp_file_beside(path)
-        .with_context(|| format!("{}: cannot create a file there", path.display()))?;
-    {
-        let mut buf = std::io::BufWriter::new(tmp.as_file_mut());
-        write(&mut buf)?;
-        buf.flush()
-            .with_context(|| format!("{}: write failed", path.display()))?;
-    }
-    tmp.persist(path)
-        .with_context(|| format!("{}: cannot write", path.display()))?;
-    Ok(())
 }
 
 /// A progress bar on a terminal; hidden when piped, `--quiet` or `--json`.

@@ -4,6 +4,7 @@
 
 mod cmd;
 mod common;
+mod signals;
 
 use std::process::ExitCode;
 
@@ -42,6 +43,11 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let global = cli.global;
+    if let Err(e) = signals::install()
+        && !global.quiet
+    {
+        eprintln!("warning: signals will end isoforge without cleaning up: {e}");
+    }
     let result = match cli.command {
         Command::Mesh(args) => cmd::mesh::run(args, &global),
         Command::Render(args) => cmd::render::run(args, &global),

@@ -7,11 +7,11 @@
 //! a crash it names a line that was executed, never one that was not.
 
 use std::fmt::Write as _;
-use std::fs::{self, File};
-use std::io::Write;
+use std::fs;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use isoforge_output::{Durability, Options, Streams};
 use thiserror::Error;
 
 use crate::gcode::Program;
@@ -252,26 +252,16 @@ impl JournalRecord {
     }
 }
 
-/// Replaces `path` with `contents` so that a crash leaves the old file or the new one, whole.
+/// Replaces `path` with `contents` so that a crash leaves the old file or the new one, whole:
+/// `isoforge-output` with the file and its folder synced to disk. A symlink's target is
+/// replaced; a FIFO or device is refused, since `--resume` must read the journal back.
 pub fn write_durable(path: &Path, contents: &[u8]) -> std::io::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
+    let options = Options {
+        durability: Durability::Sync,
+        streams: Streams::Refuse,
+        ..Options::default()
     };
-    let mut tmp_name = path.as_os_str().to_owned();
-    tmp_name.push(".tmp");
-    let tmp = PathBuf::from(tmp_name);
-    {
-        let mut f = File::create(&tmp)?;
-        f.write_all(contents)?;
-        f.sync_all()?;
-    }
-    fs::rename(&tmp, path)?;
-    // The rename itself is durable only once the folder is synced.
-    if let Ok(d) = File::open(&dir) {
-        let _ = d.sync_all();
-    }
-    Ok(())
+    isoforge_output::write_file(path, contents, options).map_err(std::io::Error::from)
 }
 
 /// Keeps a job's journal up to date.

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use isoforge_mesh::samples::{cube, cuboid, merge, tetrahedron, uv_sphere};
 use isoforge_mesh::{Mesh, MeshFormat, write_mesh};
+use isoforge_output::{Options, write_file};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = std::env::args()
@@ -42,17 +43,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // A binary STL cut in the middle of its seventh triangle.
     let mut bytes = Vec::new();
     isoforge_mesh::io::encode(&c, MeshFormat::Stl, &mut bytes)?;
-    std::fs::write(dir.join("truncated.stl"), &bytes[..84 + 50 * 6 + 21])?;
+    let cut = &bytes[..84 + 50 * 6 + 21];
+    write_file(&dir.join("truncated.stl"), cut, Options::default())?;
 
     put("sphere.ply", &uv_sphere(5.0, 16, 8), MeshFormat::Ply)?;
 
     // Hand-written text files exercise what our writers never produce: quads, slashes,
     // negative indices, ASCII PLY.
-    std::fs::write(
-        dir.join("cube_quads.obj"),
-        "# a 10 mm cube as quads\nv 0 0 0\nv 10 0 0\nv 0 10 0\nv 10 10 0\nv 0 0 10\nv 10 0 10\n\
+    write_file(
+        &dir.join("cube_quads.obj"),
+        b"# a 10 mm cube as quads\nv 0 0 0\nv 10 0 0\nv 0 10 0\nv 10 10 0\nv 0 0 10\nv 10 0 10\n\
          v 0 10 10\nv 10 10 10\nvn 0 0 1\n\
          f 1//1 3//1 4//1 2//1\nf 5/1/1 6/1/1 8/1/1 7/1/1\nf 1 2 6 5\nf 3 7 8 4\nf -8 -4 -2 -6\nf 2 4 8 6\n",
+        Options::default(),
     )?;
     let t = tetrahedron();
     let mut ply = format!(
@@ -68,7 +71,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for f in &t.triangles {
         ply.push_str(&format!("3 {} {} {}\n", f[0], f[1], f[2]));
     }
-    std::fs::write(dir.join("tetrahedron.ply"), ply)?;
+    write_file(
+        &dir.join("tetrahedron.ply"),
+        ply.as_bytes(),
+        Options::default(),
+    )?;
     println!("wrote fixtures to {}", dir.display());
     Ok(())
 }

@@ -13,7 +13,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
-//! The scripting language and library are specified in `SCRIPT_API.md`: `x y z`, mixed
+//! The scripting language and library are described in `docs/language.md`: `x y z`, mixed
 //! number/Shape arithmetic with `^` as power and real division, the classic library,
 //! `param(..)` and `bounds(..)`. Scripts run sandboxed: an operation limit, a call-depth
 //! limit, no `import` and no `eval`, and output to stderr only.

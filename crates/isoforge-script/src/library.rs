@@ -1,4 +1,4 @@
-//! The classic library in scripts: every name of SCRIPT_API.md's classic section, bound to
+//! The classic library in scripts: every name of docs/language.md's classic section, bound to
 //! `isoforge_shapes`. Numeric arguments accept numbers or Shapes (a radius may vary).
 
 use isoforge_field::Shape;

@@ -1,4 +1,4 @@
-//! The scripting language of SCRIPT_API.md ("Numbers, coordinates, operators").
+//! The scripting language of docs/language.md ("The language core").
 
 use std::path::Path;
 

@@ -20,7 +20,7 @@ use crate::source::{Layer, Source, layer_stack, outlines_bbox};
 const CELL_PER_LINE_WIDTH: f64 = 1.0 / 8.0;
 
 /// Outline simplification tolerance, mm: well under a line width, and enough to keep
-/// dense contours from slowing polygon offsetting (../shared/DEPS.md).
+/// dense contours from slowing polygon offsetting (docs/constants.md).
 pub const OUTLINE_TOLERANCE: f64 = 0.005;
 
 /// A layer's region with its skin and infill lines.

@@ -87,7 +87,7 @@ pub fn segments_cross(a: Point, b: Point, c: Point, d: Point) -> bool {
 
 /// Douglas-Peucker simplification of a closed contour: drops points that lie within
 /// `tol` of the simplified outline. Keeps at least a triangle. Dense marching-squares
-/// contours slow polygon offsetting down superlinearly (../shared/DEPS.md), so every
+/// contours slow polygon offsetting down superlinearly (docs/constants.md), so every
 /// outline goes through this before perimeters are built.
 pub fn simplify_closed(c: &[Point], tol: f64) -> Contour {
     let n = c.len();

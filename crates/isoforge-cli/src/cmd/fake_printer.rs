@@ -1,11 +1,11 @@
 //! `isoforge fake-printer`: a simulated Marlin-style printer on a pseudo-terminal.
 
-use std::io::Write;
-use std::path::PathBuf;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use isoforge_host::fake::{FakeConfig, FakePrinter, Faults, FirmwareConfig};
 
@@ -20,7 +20,7 @@ path on the first line of stdout; point `isoforge print --port PATH` (or any hos
 checks line numbers and checksums as Marlin does, has 4 command slots and a 128-byte receive \
 buffer (bytes beyond it are lost), answers `ok` after executing, heats with `echo:busy: \
 processing` during M109/M190, and reports temperatures (M105, M155). It serves until the host \
-disconnects or it is killed.\n\nExample:\n  isoforge fake-printer --faults corrupt=0.01,drop=0.005,seed=7 --log executed.tsv"
+disconnects or a signal (Ctrl-C, SIGTERM, SIGHUP) stops it; the --log file is written then, whole.\n\nExample:\n  isoforge fake-printer --faults corrupt=0.01,drop=0.005,seed=7 --log executed.tsv"
 )]
 pub struct FakePrinterArgs {
     /// Limit the link to this baud rate's byte speed (10 bits a byte); default: no limit.
@@ -34,7 +34,8 @@ pub struct FakePrinterArgs {
     /// seed=N. Example: corrupt=0.01,drop=0.005,reset-at=5000,seed=7
     #[arg(long, value_name = "SPEC")]
     pub faults: Option<String>,
-    /// Record every executed command to this file: `LINE<TAB>COMMAND` (`-` for unnumbered).
+    /// Record every executed command to this file: `LINE<TAB>COMMAND` (`-` for unnumbered),
+    /// written when the printer stops. An existing file that is not such a log is refused.
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
     /// Real seconds per simulated second of heating (heating runs at 40 °C a second).
@@ -50,6 +51,9 @@ pub fn run(args: FakePrinterArgs, global: &Global) -> Result<ExitCode> {
     };
     if !(0.0..=10.0).contains(&args.heat_tick) {
         anyhow::bail!("--heat-tick {}: expected 0 to 10 seconds", args.heat_tick);
+    }
+    if let Some(log) = &args.log {
+        refuse_foreign_log(log)?;
     }
     let printer = FakePrinter::spawn(FakeConfig {
         firmware: FirmwareConfig {
@@ -72,6 +76,47 @@ pub fn run(args: FakePrinterArgs, global: &Global) -> Result<ExitCode> {
             printer.path()
         );
     }
+    // A signal stops the printer the way a disconnect does, so the log is written.
+    let signals = crate::signals::take();
+    let stop = printer.stop_handle();
+    while printer.is_running() {
+        if let Some(signal) = signals.recv_timeout(Duration::from_millis(100)) {
+            if !global.quiet && !global.json {
+                eprintln!("fake printer: {}, stopping", crate::signals::name(signal));
+            }
+            stop.stop();
+        }
+    }
     printer.wait().context("fake printer")?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// The fake printer has no input file, so it cannot see that `--log` names the G-code a host
+/// is printing. It refuses instead to replace a file that is not one of its own logs: a
+/// non-empty regular file whose first line is not `LINE<TAB>COMMAND`.
+fn refuse_foreign_log(path: &Path) -> Result<()> {
+    // Only regular files: opening a FIFO to look would wait for a writer.
+    let is_file = std::fs::metadata(path).is_ok_and(|m| m.is_file());
+    if !is_file {
+        return Ok(());
+    }
+    let file = std::fs::File::open(path).with_context(|| format!("--log {}", path.display()))?;
+    let mut first = Vec::new();
+    BufReader::new(file.take(4096))
+        .read_until(b'\n', &mut first)
+        .with_context(|| format!("--log {}", path.display()))?;
+    let text = String::from_utf8_lossy(&first);
+    let line = text.trim_end_matches(['\n', '\r']);
+    let ours = line
+        .split_once('\t')
+        .is_some_and(|(n, _)| n == "-" || (!n.is_empty() && n.bytes().all(|b| b.is_ascii_digit())));
+    if first.is_empty() || ours {
+        return Ok(());
+    }
+    let shown: String = line.chars().take(60).collect();
+    bail!(
+        "--log {}: the file exists and is not a fake-printer log (it starts {shown:?}); \
+         refusing to replace it, give a new file",
+        path.display()
+    )
 }

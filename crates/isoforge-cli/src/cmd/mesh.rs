@@ -7,7 +7,9 @@ use std::time::Instant;
 
 use anyhow::{Context as _, Result, bail};
 use clap::Args;
-use isoforge_mesh::{MAX_DEPTH, MeshFormat, MeshSettings, check, write_mesh};
+use isoforge_mesh::io::encode;
+use isoforge_mesh::{MAX_DEPTH, MeshFormat, MeshSettings, check};
+use isoforge_output::{Options, OutputFile};
 use serde_json::json;
 
 use crate::common::{Global, ModelArgs, print_json, progress_bar};
@@ -110,6 +112,9 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
         },
         (None, None) => DEFAULT_DEPTH,
     };
+    // Before the work: a model given as its own output, a missing folder or a read-only
+    // file is refused now, not after minutes of meshing.
+    let out = OutputFile::prepare(&output, Options::with_inputs(&[&args.model.model]))?;
 
     let bar = progress_bar(global, 1000, "meshing");
     let mut settings = MeshSettings::new(bounds, depth);
@@ -130,8 +135,10 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
         );
     }
     let report = check(&mesh);
-    write_mesh(&mesh, &output, format)
-        .with_context(|| format!("{}: cannot write the mesh", output.display()))?;
+    out.write_with(|w| {
+        encode(&mesh, format, w)
+            .with_context(|| format!("{}: cannot write the mesh", output.display()))
+    })?;
     let seconds = start.elapsed().as_secs_f64();
     if global.json {
         print_json(&json!({

@@ -3,7 +3,6 @@
 use std::io::{BufRead, IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::mpsc;
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
@@ -14,6 +13,8 @@ use isoforge_host::journal::{self, JournalRecord, Status};
 use isoforge_host::protocol::{Config, Event};
 use isoforge_host::state::MachineState;
 use isoforge_host::streamer::{self, Control, Job, Progress, Update};
+use isoforge_output::{Durability, Options, Streams, check_file};
+use signal_hook::consts::SIGINT;
 
 use crate::common::{Global, print_json};
 
@@ -28,7 +29,8 @@ count with ADVANCED_OK), resend requests answered from a history, busy and heati
 silence probed with M105 and reported, a board reset (`start`) or `Error:` stopping the job.\n\n\
 A progress bar shows percent, layer, Z, ETA and temperatures on a terminal. Ctrl-C pauses and asks \
 to resume or cancel (cancel stops sending, then heaters off M104 S0/M140 S0 and motors off M84; \
---emergency sends M112 instead); when stdin is not a terminal Ctrl-C cancels.\n\n\
+--emergency sends M112 instead); when stdin is not a terminal Ctrl-C cancels, and SIGTERM or SIGHUP \
+always cancel that way.\n\n\
 The journal (FILE.journal unless --journal) records the last acknowledged line durably. After a \
 crash, cable pull or reset, `--resume` re-heats to the last targets, restores G90/G91 and M82/M83, \
 sets E with G92, lifts, homes X and Y, returns to the last position and continues from the first \
@@ -87,6 +89,19 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
         .journal
         .clone()
         .unwrap_or_else(|| journal::default_path(&args.file));
+    if !args.no_journal {
+        // Before anything is sent: a journal that is the G-code itself (or a FIFO, a
+        // read-only file, a missing folder) is refused now, not at the first write.
+        check_file(
+            &journal_path,
+            Options {
+                inputs: &[&args.file],
+                durability: Durability::Sync,
+                streams: Streams::Refuse,
+            },
+        )
+        .context("the job journal")?;
+    }
 
     let (start, prelude, state) = if args.resume || args.from_layer.is_some() {
         let record = if args.resume && !args.no_journal {
@@ -136,13 +151,8 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
     };
 
     let control = Control::new();
-    let (tx, rx) = mpsc::channel::<()>();
-    if let Err(e) = ctrlc::set_handler(move || {
-        let _ = tx.send(());
-    }) && !global.quiet
-    {
-        eprintln!("warning: Ctrl-C will not pause the job: {e}");
-    }
+    // From here a signal must not just end the process: the printer would be left hot.
+    let signals = crate::signals::take();
 
     let bar = if global.chatty() {
         let bar = ProgressBar::new(program.commands.len() as u64);
@@ -186,11 +196,17 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
             })
         });
         while !worker.is_finished() {
-            if rx.recv_timeout(Duration::from_millis(100)).is_err() {
+            let Some(signal) = signals.recv_timeout(Duration::from_millis(100)) else {
                 continue;
-            }
-            if !interactive {
-                say(&bar, "interrupted: cancelling (heaters and motors off)");
+            };
+            // SIGTERM and SIGHUP (the terminal is gone) cancel at once, as Ctrl-C does
+            // without a terminal to ask on.
+            if signal != SIGINT || !interactive {
+                let name = crate::signals::name(signal);
+                say(
+                    &bar,
+                    &format!("interrupted by {name}: cancelling (heaters and motors off)"),
+                );
                 cancel(&control, args.emergency);
                 continue;
             }

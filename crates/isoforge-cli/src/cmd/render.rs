@@ -9,7 +9,9 @@ use clap::{Args, ValueEnum};
 use isoforge_render::{RenderSettings, View, render};
 use serde_json::json;
 
-use crate::common::{Global, ModelArgs, print_json, write_atomic};
+use isoforge_output::{Options, OutputFile};
+
+use crate::common::{Global, ModelArgs, print_json};
 
 /// The viewpoints, as named on the command line.
 #[derive(Copy, Clone, Debug, Default, ValueEnum)]
@@ -83,6 +85,7 @@ pub fn run(args: RenderArgs, global: &Global) -> Result<ExitCode> {
         .output
         .clone()
         .unwrap_or_else(|| args.model.model.with_extension("png"));
+    let output = OutputFile::prepare(&out, Options::with_inputs(&[&args.model.model]))?;
     let settings = RenderSettings {
         view: args.view.into(),
         width: args.size.0,
@@ -93,7 +96,7 @@ pub fn run(args: RenderArgs, global: &Global) -> Result<ExitCode> {
     let spinner = crate::common::progress_bar(global, 1, "render");
     let image = render(&loaded.model.shape, &loaded.bounds, &settings);
     spinner.finish_and_clear();
-    write_atomic(&out, |w| {
+    output.write_with(|w| {
         image
             .write_png(w)
             .with_context(|| format!("{}: PNG encoding failed", out.display()))

@@ -11,7 +11,9 @@ use isoforge_mesh::Mesh;
 use isoforge_slice::raster::GridSpec;
 use isoforge_slice::{Profile, Source, render_layers, sl1, slice_gcode, svx};
 
-use crate::common::{Global, ModelArgs, print_json, progress_bar, write_atomic};
+use isoforge_output::{Options, OutputFile, OutputFolder};
+
+use crate::common::{Global, ModelArgs, print_json, progress_bar};
 
 /// Arguments of `isoforge slice`.
 #[derive(Args, Debug)]
@@ -91,6 +93,41 @@ fn profile(args: &SliceArgs, resin: bool) -> Result<Profile> {
     Ok(p)
 }
 
+/// Where the slices go, checked and ready before the work (one destination is required).
+enum Destination {
+    Gcode(OutputFile),
+    Images(Images),
+}
+
+/// Where layer images go.
+enum Images {
+    Sl1(OutputFile),
+    Svx(OutputFile),
+    PngDir(OutputFolder),
+}
+
+impl Destination {
+    /// Refuses an output that is the model or the profile, a missing folder, a read-only
+    /// file, or a --png-dir that is not empty, before any slicing.
+    fn prepare(args: &SliceArgs) -> Result<Destination> {
+        let mut inputs: Vec<&Path> = vec![&args.model.model];
+        inputs.extend(args.profile.as_deref());
+        let options = Options::with_inputs(&inputs);
+        let file = |p: &Path| OutputFile::prepare(p, options);
+        Ok(match (&args.output, &args.sl1, &args.svx, &args.png_dir) {
+            (Some(out), _, _, _) => Destination::Gcode(file(out)?),
+            (_, Some(out), _, _) => Destination::Images(Images::Sl1(file(out)?)),
+            (_, _, Some(out), _) => Destination::Images(Images::Svx(file(out)?)),
+            (_, _, _, Some(dir)) => {
+                Destination::Images(Images::PngDir(OutputFolder::prepare(dir, options)?))
+            }
+            _ => bail!(
+                "no output given: use -o OUT.gcode, --sl1 OUT.sl1, --svx OUT.svx or --png-dir DIR"
+            ),
+        })
+    }
+}
+
 /// Runs the command.
 pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
     let started = Instant::now();
@@ -98,6 +135,7 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
     // Settings first: a bad profile is reported before any slow work.
     let p = profile(&args, resin)?;
     let loaded = load(&args.model)?;
+    let destination = Destination::prepare(&args)?;
     let source = loaded.source();
     let bar = progress_bar(global, 0, "slicing");
     let progress = |done: usize, total: usize| {
@@ -105,42 +143,43 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
         bar.set_position(done as u64);
     };
 
-    if let Some(out) = &args.output {
-        let s = p.fdm()?;
-        let job = slice_gcode(&source, &s, &progress)?;
-        bar.finish_and_clear();
-        write_atomic(out, |w| {
-            w.write_all(job.gcode.as_bytes())?;
-            Ok(())
-        })?;
-        let seconds = started.elapsed().as_secs_f64();
-        if global.json {
-            print_json(&serde_json::json!({
-                "layers": job.stats.layers,
-                "seconds": seconds,
-                "filament_mm": job.stats.filament_mm,
-                "filament_g": job.stats.filament_g,
-                "estimated_print_seconds": job.stats.seconds,
-            }));
-        } else if !global.quiet {
-            eprintln!(
-                "{}: {} layers, {:.2} m of filament ({:.1} g), about {:.0} min to print; sliced in {:.2} s",
-                out.display(),
-                job.stats.layers,
-                job.stats.filament_mm / 1000.0,
-                job.stats.filament_g,
-                job.stats.seconds / 60.0,
-                seconds
-            );
+    let images_out = match destination {
+        Destination::Images(images) => images,
+        Destination::Gcode(file) => {
+            let out = file.path().to_path_buf();
+            let s = p.fdm()?;
+            let job = slice_gcode(&source, &s, &progress)?;
+            bar.finish_and_clear();
+            file.write_with(|w| Ok::<_, anyhow::Error>(w.write_all(job.gcode.as_bytes())?))?;
+            let seconds = started.elapsed().as_secs_f64();
+            if global.json {
+                print_json(&serde_json::json!({
+                    "layers": job.stats.layers,
+                    "seconds": seconds,
+                    "filament_mm": job.stats.filament_mm,
+                    "filament_g": job.stats.filament_g,
+                    "estimated_print_seconds": job.stats.seconds,
+                }));
+            } else if !global.quiet {
+                eprintln!(
+                    "{}: {} layers, {:.2} m of filament ({:.1} g), about {:.0} min to print; sliced in {:.2} s",
+                    out.display(),
+                    job.stats.layers,
+                    job.stats.filament_mm / 1000.0,
+                    job.stats.filament_g,
+                    job.stats.seconds / 60.0,
+                    seconds
+                );
+            }
+            return Ok(ExitCode::SUCCESS);
         }
-        return Ok(ExitCode::SUCCESS);
-    }
+    };
 
     let r = p.resin().with_context(|| {
         "image output (--sl1, --svx, --png-dir) needs a resin profile with pixel_size and \
          resolution (e.g. fixtures/printers/prusa_sl1.toml)"
     })?;
-    let spec = if args.svx.is_some() {
+    let spec = if matches!(images_out, Images::Svx(_)) {
         GridSpec::Fit {
             pixel: r.layer_height,
         }
@@ -160,45 +199,52 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
             r.max_height
         );
     }
-    let written: PathBuf;
-    if let Some(out) = &args.sl1 {
-        let job = job_name(out);
-        let thumb = sl1::thumbnail(
-            &images.silhouette,
-            images.silhouette_size.0,
-            images.silhouette_size.1,
-            sl1::THUMBNAIL,
-        )?;
-        write_atomic(out, |w| {
-            let mut buf = std::io::Cursor::new(Vec::new());
-            sl1::write_sl1(&mut buf, &images, &r, &job, &thumb)?;
-            w.write_all(buf.get_ref())?;
-            Ok(())
-        })?;
-        written = out.clone();
-    } else if let Some(out) = &args.svx {
-        let g = images.grid;
-        let origin = [
-            g.origin[0],
-            g.origin[1],
-            images
-                .layers
-                .first()
-                .map_or(0.0, |l| l.model_z - l.height * 0.5),
-        ];
-        write_atomic(out, |w| {
-            let mut buf = std::io::Cursor::new(Vec::new());
-            svx::write_svx(&mut buf, &images, r.layer_height, origin)?;
-            w.write_all(buf.get_ref())?;
-            Ok(())
-        })?;
-        written = out.clone();
-    } else if let Some(dir) = &args.png_dir {
-        write_png_dir(dir, &images.pngs)?;
-        written = dir.clone();
-    } else {
-        bail!("no output given: use -o OUT.gcode, --sl1 OUT.sl1, --svx OUT.svx or --png-dir DIR");
-    }
+    let written: PathBuf = match images_out {
+        Images::Sl1(file) => {
+            let out = file.path().to_path_buf();
+            let job = job_name(&out);
+            let thumb = sl1::thumbnail(
+                &images.silhouette,
+                images.silhouette_size.0,
+                images.silhouette_size.1,
+                sl1::THUMBNAIL,
+            )?;
+            file.write_with(|w| {
+                let mut buf = std::io::Cursor::new(Vec::new());
+                sl1::write_sl1(&mut buf, &images, &r, &job, &thumb)?;
+                w.write_all(buf.get_ref())?;
+                Ok::<_, anyhow::Error>(())
+            })?;
+            out
+        }
+        Images::Svx(file) => {
+            let out = file.path().to_path_buf();
+            let g = images.grid;
+            let origin = [
+                g.origin[0],
+                g.origin[1],
+                images
+                    .layers
+                    .first()
+                    .map_or(0.0, |l| l.model_z - l.height * 0.5),
+            ];
+            file.write_with(|w| {
+                let mut buf = std::io::Cursor::new(Vec::new());
+                svx::write_svx(&mut buf, &images, r.layer_height, origin)?;
+                w.write_all(buf.get_ref())?;
+                Ok::<_, anyhow::Error>(())
+            })?;
+            out
+        }
+        Images::PngDir(mut folder) => {
+            let dir = folder.path().to_path_buf();
+            for (k, png) in images.pngs.iter().enumerate() {
+                folder.write(&format!("{k:05}.png"), png)?;
+            }
+            folder.commit()?;
+            dir
+        }
+    };
     let seconds = started.elapsed().as_secs_f64();
     if global.json {
         print_json(&serde_json::json!({"layers": images.layers.len(), "seconds": seconds}));
@@ -234,44 +280,4 @@ fn job_name(out: &Path) -> String {
     } else {
         clean
     }
-}
-
-/// Writes the PNGs into a fresh temporary folder beside `dir`, then renames it into place,
-/// so the folder appears whole or not at all. An existing `dir` must be empty.
-fn write_png_dir(dir: &Path, pngs: &[Vec<u8>]) -> Result<()> {
-    if dir.exists() {
-        let empty = std::fs::read_dir(dir)
-            .with_context(|| format!("{}: cannot read the folder", dir.display()))?
-            .next()
-            .is_none();
-        if !empty {
-            bail!(
-                "{}: the folder exists and is not empty; give a new or empty folder",
-                dir.display()
-            );
-        }
-    }
-    let parent = match dir.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let tmp = tempfile::Builder::new()
-        .prefix(".isoforge-png-")
-        .tempdir_in(parent)
-        .with_context(|| format!("{}: cannot create a folder there", parent.display()))?;
-    for (k, png) in pngs.iter().enumerate() {
-        let path = tmp.path().join(format!("{k:05}.png"));
-        std::fs::write(&path, png).with_context(|| format!("{}: write failed", path.display()))?;
-    }
-    if dir.exists() {
-        std::fs::remove_dir(dir)
-            .with_context(|| format!("{}: cannot replace the empty folder", dir.display()))?;
-    }
-    let kept = tmp.keep();
-    if let Err(e) = std::fs::rename(&kept, dir) {
-        let _ = std::fs::remove_dir_all(&kept);
-        return Err(e)
-            .with_context(|| format!("{}: cannot move the images into place", dir.display()));
-    }
-    Ok(())
 }

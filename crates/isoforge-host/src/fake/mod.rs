@@ -10,7 +10,6 @@ mod faults;
 mod firmware;
 
 use std::collections::VecDeque;
-use std::fs::File;
 use std::io::{self, BufWriter, Read, Write};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -18,6 +17,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use isoforge_output::{Options, OutputError, OutputFile};
 use serialport::{SerialPort, TTYPort};
 use thiserror::Error;
 
@@ -34,7 +34,9 @@ pub struct FakeConfig {
     /// Stop when the host closes the port (the CLI does); otherwise keep serving, so a host
     /// can reconnect (tests of `--resume` do).
     pub exit_on_disconnect: bool,
-    /// Append every executed command to this file (`<line>\t<command>`, `-` for unnumbered).
+    /// Record every executed command in this file (`<line>\t<command>`, `-` for
+    /// unnumbered). Written through `isoforge-output`: it appears whole when the printer
+    /// stops (a FIFO or terminal gets each line as it runs).
     pub log: Option<PathBuf>,
 }
 
@@ -45,12 +47,12 @@ pub enum FakeError {
     #[error("cannot open a pseudo-terminal: {0}")]
     Pty(#[from] serialport::Error),
     /// The log file could not be created.
-    #[error("{path}: {source}")]
+    #[error("{source}")]
     Log {
         /// The file.
         path: String,
-        /// Why.
-        source: io::Error,
+        /// Why (the message names the file).
+        source: OutputError,
     },
 }
 
@@ -70,12 +72,12 @@ impl FakePrinter {
             serialport::Error::new(serialport::ErrorKind::Unknown, "pty has no name")
         })?;
         let log = match &cfg.log {
-            Some(p) => Some(BufWriter::new(File::create(p).map_err(|source| {
-                FakeError::Log {
+            Some(p) => Some(BufWriter::new(
+                OutputFile::prepare(p, Options::default()).map_err(|source| FakeError::Log {
                     path: p.display().to_string(),
                     source,
-                }
-            })?)),
+                })?,
+            )),
             None => None,
         };
         let stop = Arc::new(AtomicBool::new(false));
@@ -118,6 +120,12 @@ impl FakePrinter {
             .clone()
     }
 
+    /// A handle that stops the printer from another thread (a signal handler), after which
+    /// [`wait`](Self::wait) returns with the log written.
+    pub fn stop_handle(&self) -> StopHandle {
+        StopHandle(self.stop.clone())
+    }
+
     /// True while the printer thread runs.
     pub fn is_running(&self) -> bool {
         self.thread.as_ref().is_some_and(|t| !t.is_finished())
@@ -143,6 +151,17 @@ impl Drop for FakePrinter {
     }
 }
 
+/// Stops a fake printer from another thread.
+#[derive(Clone, Debug)]
+pub struct StopHandle(Arc<AtomicBool>);
+
+impl StopHandle {
+    /// Asks the printer to stop; it finishes within [`IDLE_WAKE`].
+    pub fn stop(&self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+}
+
 /// The firmware model behind the pty master, with the wire's timing.
 struct Link {
     master: TTYPort,
@@ -152,7 +171,7 @@ struct Link {
     firmware: Firmware,
     byte_time: Option<Duration>,
     exit_on_disconnect: bool,
-    log: Option<BufWriter<File>>,
+    log: Option<BufWriter<OutputFile>>,
     stop: Arc<AtomicBool>,
     executed: Arc<Mutex<Vec<Executed>>>,
 }
@@ -161,7 +180,21 @@ struct Link {
 const IDLE_WAKE: Duration = Duration::from_millis(20);
 
 impl Link {
+    /// Serves until stopped or disconnected, then puts the log in place: the commands that
+    /// ran are worth keeping even when the link failed.
     fn run(mut self) -> io::Result<()> {
+        let served = self.serve();
+        let logged = match self.log.take() {
+            Some(log) => log
+                .into_inner()
+                .map_err(io::IntoInnerError::into_error)
+                .and_then(|out| out.commit().map_err(io::Error::from)),
+            None => Ok(()),
+        };
+        served.and(logged)
+    }
+
+    fn serve(&mut self) -> io::Result<()> {
         // Bytes on their way to the firmware, each with the time its last bit arrives.
         let mut inbound: VecDeque<(Instant, Vec<u8>)> = VecDeque::new();
         let mut outbound: VecDeque<(Instant, Vec<u8>)> = VecDeque::new();

@@ -2,8 +2,8 @@
 //!
 //! Readers take the whole file as bytes, pick the format by content (falling back on the
 //! extension), and never panic: every malformed input is a [`MeshIoError::Parse`] naming the
-//! file and the line (text formats) or byte offset (binary formats). Writers produce the
-//! whole file in a temporary beside the target and rename it into place.
+//! file and the line (text formats) or byte offset (binary formats). [`encode`] writes a
+//! format onto any writer; [`write_mesh`] puts it in a file through `isoforge-output`.
 
 pub mod obj;
 pub mod ply;
@@ -13,6 +13,8 @@ mod weld;
 
 use std::io::Write;
 use std::path::Path;
+
+use isoforge_output::{Options, OutputFile};
 
 use crate::mesh::Mesh;
 
@@ -104,6 +106,9 @@ pub enum MeshIoError {
         /// The cause.
         source: std::io::Error,
     },
+    /// The output was refused or could not be put in place (the message names the path).
+    #[error(transparent)]
+    Output(#[from] isoforge_output::OutputError),
     /// The file's content is not valid.
     #[error("{path}: {message}")]
     Parse {
@@ -189,39 +194,17 @@ pub fn encode(mesh: &Mesh, format: MeshFormat, w: &mut dyn Write) -> std::io::Re
     }
 }
 
-/// Writes a mesh whole or not at all (temporary file, then rename).
+/// Writes a mesh file by the rules of [`isoforge_output`]: whole or not at all, into a
+/// symlink's target, keeping the mode of a file it replaces. No fsync: a mesh can be
+/// written again, and waiting for the disk would double the time of a large one.
 pub fn write_mesh(mesh: &Mesh, path: &Path, format: MeshFormat) -> Result<(), MeshIoError> {
-    let io_error = |source| MeshIoError::Io {
-        path: path.display().to_string(),
-        source,
-    };
-    let mut tmp = temp_file_beside(path).map_err(io_error)?;
-    {
-        let mut w = std::io::BufWriter::with_capacity(1 << 20, tmp.as_file_mut());
-        encode(mesh, format, &mut w).map_err(io_error)?;
-        w.flush().map_err(io_error)?;
-    }
-    tmp.persist(path).map_err(|e| io_error(e.error))?;
-    Ok(())
-}
-
-/// A temporary file in the same folder as `path`, to be renamed over it once written whole
-/// (a rename within a folder is atomic). Every output file isoforge writes goes this way.
-pub fn temp_file_beside(path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".isoforge-").suffix(".tmp");
-    // tempfile creates files private (0600); an output file should get the usual mode
-    // (0666 less the umask, which open(2) applies), as if written directly.
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        builder.permissions(std::fs::Permissions::from_mode(0o666));
-    }
-    builder.tempfile_in(dir)
+    let out = OutputFile::prepare(path, Options::default())?;
+    out.write_with(|w| {
+        encode(mesh, format, w).map_err(|source| MeshIoError::Io {
+            path: path.display().to_string(),
+            source,
+        })
+    })
 }
 
 /// A coordinate for text formats: shortest text that reads back to the same f32, with

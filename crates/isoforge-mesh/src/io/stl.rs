@@ -4,7 +4,7 @@
 //! triangle (normal, three corners as f32, a u16 attribute). ASCII: `solid name`, then
 //! `facet normal nx ny nz / outer loop / vertex x y z (x3) / endloop / endfacet`, then
 //! `endsolid`. STL does not share vertices, so both readers weld corners at exactly equal
-//! positions. We parse ASCII ourselves: stl_io rejects `solid` with no name (DEPS.md).
+//! positions. We parse ASCII ourselves: stl_io rejects `solid` with no name (docs/constants.md).
 
 use std::io::Write;
 

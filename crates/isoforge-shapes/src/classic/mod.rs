@@ -1,6 +1,6 @@
 //! The classic library: the primitives, transforms and combinations of the 2010
 //! function-based modeler, with its names (in snake case) and exactly its formulas.
-//! `/work/shared/SCRIPT_API.md` ("The classic library") is the contract.
+//! `docs/language.md` ("The classic library") lists every name with its formula.
 
 mod combine;
 mod primitives;

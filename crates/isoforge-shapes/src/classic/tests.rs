@@ -1,4 +1,4 @@
-//! Each classic formula checked at sample points against the formula as SCRIPT_API.md
+//! Each classic formula checked at sample points against the formula as docs/language.md
 //! writes it, in plain f64.
 
 use std::f64::consts::PI;

@@ -1,9 +1,7 @@
 //! A printer that resets, halts or goes silent mid-job: the job stops with the right error in
 //! bounded time, and the journal lets a resume finish it with nothing executed twice.
 
-mod host_support;
-
-use host_support::*;
+use crate::support::*;
 use isoforge_host::fake::{FakePrinter, Faults};
 use isoforge_host::gcode::Program;
 use isoforge_host::journal::{self, JournalRecord, Status};

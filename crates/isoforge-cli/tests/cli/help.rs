@@ -1,11 +1,9 @@
-//! Every subcommand answers `--help` (this file also makes `cargo test` build the binary
-//! that the end-to-end tests in `tests/` run).
+//! Every subcommand answers `--help`; an unknown one is a usage error.
 
-use std::process::Command;
+use crate::isoforge;
 
 #[test]
 fn every_subcommand_has_help() {
-    let bin = env!("CARGO_BIN_EXE_isoforge");
     for sub in [
         "mesh",
         "render",
@@ -15,7 +13,7 @@ fn every_subcommand_has_help() {
         "print",
         "fake-printer",
     ] {
-        let out = Command::new(bin).args([sub, "--help"]).output().unwrap();
+        let out = isoforge(&[sub, "--help"]);
         assert!(out.status.success(), "{sub} --help failed");
         assert!(
             String::from_utf8_lossy(&out.stdout).contains("Usage"),
@@ -26,7 +24,6 @@ fn every_subcommand_has_help() {
 
 #[test]
 fn unknown_subcommand_is_a_usage_error() {
-    let bin = env!("CARGO_BIN_EXE_isoforge");
-    let out = Command::new(bin).arg("frobnicate").output().unwrap();
+    let out = isoforge(&["frobnicate"]);
     assert_eq!(out.status.code(), Some(2));
 }

@@ -1,7 +1,7 @@
 //! `isoforge check` end to end on the mesh fixtures: exit codes, the JSON figures, and
 //! messages that name the file.
 
-use isoforge_tests::{fixtures, isoforge};
+use crate::{fixtures, isoforge};
 
 fn mesh(name: &str) -> String {
     fixtures().join("meshes").join(name).display().to_string()

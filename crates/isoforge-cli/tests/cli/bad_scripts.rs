@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use isoforge_tests::{fixtures, isoforge};
+use crate::{fixtures, isoforge};
 
 /// Each bad fixture, with the `:line:` its message must name (empty where the problem has
 /// no line: an empty or binary file, or a model whose region is wrong).

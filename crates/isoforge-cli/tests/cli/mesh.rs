@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::{fixtures, isoforge};
 use isoforge_mesh::{check, read_mesh};
-use isoforge_tests::{fixtures, isoforge};
 
 fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")

@@ -3,7 +3,7 @@
 
 use std::process::Output;
 
-use isoforge_tests::{fixtures, isoforge};
+use crate::{fixtures, isoforge};
 use serde_json::Value;
 
 fn stdout(out: &Output) -> String {

@@ -1,7 +1,5 @@
 //! Shared by the host end-to-end tests: a realistic job, a fake printer on a pty, streaming.
 
-#![allow(dead_code)]
-
 use std::path::PathBuf;
 use std::time::Duration;
 

@@ -5,8 +5,8 @@
 use std::io::Read;
 use std::path::Path;
 
+use crate::{fixtures, isoforge};
 use isoforge_slice::check;
-use isoforge_tests::{fixtures, isoforge};
 
 fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")

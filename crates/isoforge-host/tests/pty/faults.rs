@@ -1,9 +1,7 @@
 //! Streaming a 20,000-command job to the fake printer over a real pty, one fault at a time:
 //! the printer's executed record must equal the file's commands, each exactly once, in order.
 
-mod host_support;
-
-use host_support::*;
+use crate::support::*;
 use isoforge_host::fake::Faults;
 
 fn stream_with(faults: Faults, what: &str) -> isoforge_host::streamer::Report {

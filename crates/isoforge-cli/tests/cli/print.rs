@@ -5,9 +5,9 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use crate::{fixtures, isoforge, isoforge_bin};
 use isoforge_host::gcode;
 use isoforge_host::journal::{self, JournalRecord};
-use isoforge_tests::{fixtures, isoforge, isoforge_bin};
 
 /// A running `isoforge fake-printer`, killed if the test ends early.
 struct FakeProcess {
@@ -244,6 +244,16 @@ fn bad_fault_specs_are_usage_errors_with_the_syntax() {
 
 #[test]
 fn ctrl_c_without_a_terminal_cancels_cleanly() {
+    signal_cancels_cleanly("-INT");
+}
+
+#[test]
+fn sigterm_cancels_cleanly() {
+    signal_cancels_cleanly("-TERM");
+}
+
+/// Sends `signal` to a running `print` and checks it cancelled the job properly.
+fn signal_cancels_cleanly(signal: &str) {
     let dir = tempfile::tempdir().unwrap();
     let gcode_path = dir.path().join("vase.gcode");
     std::fs::write(
@@ -270,7 +280,7 @@ fn ctrl_c_without_a_terminal_cancels_cleanly() {
         .unwrap();
     std::thread::sleep(Duration::from_millis(1500));
     let status = Command::new("kill")
-        .args(["-INT", &print.id().to_string()])
+        .args([signal, &print.id().to_string()])
         .status()
         .unwrap();
     assert!(status.success());

@@ -1,10 +1,8 @@
 //! Pause, resume and cancel through the streamer's `Control`, against the fake printer.
 
-mod host_support;
-
 use std::time::Duration;
 
-use host_support::*;
+use crate::support::*;
 use isoforge_host::fake::Faults;
 use isoforge_host::streamer::{self, Control, Job, Update};
 
