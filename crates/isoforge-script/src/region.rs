@@ -12,7 +12,41 @@
 
 use isoforge_field::{Bounds, Interval, IntervalEval, PointEval, Shape, Tape};
 
-use crate::ScriptError;
+/// A model's region cannot be found, or holds nothing of the model.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RegionError {
+    /// Nothing of the search box may be inside the model.
+    #[error("the model is empty: no point within ±{half_side} mm of the origin is inside it")]
+    EmptyModel {
+        /// Half the side of the box searched, mm.
+        half_side: f64,
+    },
+    /// What may be inside reaches the search box's faces.
+    #[error(
+        "the model is not bounded: it reaches ±{half_side} mm from the origin; give it a \
+         region, e.g. bounds([x0, y0, z0], [x1, y1, z1]) in the script"
+    )]
+    Unbounded {
+        /// Half the side of the box searched, mm.
+        half_side: f64,
+    },
+    /// The box found has no volume (a model thinner than rounding).
+    #[error("the model's region came out degenerate: {min:?} to {max:?}")]
+    Degenerate {
+        /// The low corner found.
+        min: [f64; 3],
+        /// The high corner found.
+        max: [f64; 3],
+    },
+    /// Interval arithmetic proves nothing of the region is inside the model.
+    #[error("the model is empty in its region {min:?} to {max:?}: nothing there is inside it")]
+    EmptyRegion {
+        /// The region's low corner.
+        min: [f64; 3],
+        /// The region's high corner.
+        max: [f64; 3],
+    },
+}
 
 /// Half the side of the box the search starts from, in millimetres.
 pub const SEARCH_HALF_SIDE: f64 = 1e4;
@@ -164,9 +198,9 @@ fn prune(tape: &Tape, root: Cell, mut stop: impl FnMut(&Pruned, f64) -> bool) ->
 
 /// Finds a region enclosing the model by interval pruning of the box ±[`SEARCH_HALF_SIDE`].
 ///
-/// Errors: "the model is empty" when nothing of the search box may be inside, and "the
-/// model is not bounded" when what may be inside reaches the search box's faces.
-pub fn find_bounds(shape: &Shape) -> Result<Bounds, ScriptError> {
+/// Errors: [`RegionError::EmptyModel`] when nothing of the search box may be inside, and
+/// [`RegionError::Unbounded`] when what may be inside reaches the search box's faces.
+pub fn find_bounds(shape: &Shape) -> Result<Bounds, RegionError> {
     let tape = Tape::new(shape);
     let h = SEARCH_HALF_SIDE;
     let root = ([-h; 3], [h; 3]);
@@ -177,24 +211,16 @@ pub fn find_bounds(shape: &Shape) -> Result<Bounds, ScriptError> {
         })
     });
     let Some((lo, hi)) = p.bbox() else {
-        return Err(ScriptError(format!(
-            "the model is empty: no point within ±{h} mm of the origin is inside it"
-        )));
+        return Err(RegionError::EmptyModel { half_side: h });
     };
     let touches = (0..3).any(|i| lo[i] <= -h || hi[i] >= h);
     if touches {
-        return Err(ScriptError(format!(
-            "the model is not bounded: it reaches ±{h} mm from the origin. Give it a region: \
-             bounds([x0, y0, z0], [x1, y1, z1]) in the script, or --bounds X0,Y0,Z0,X1,Y1,Z1"
-        )));
+        return Err(RegionError::Unbounded { half_side: h });
     }
     let longest = (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
     let pad = PADDING * longest;
-    Bounds::new(lo.map(|v| v - pad), hi.map(|v| v + pad)).ok_or_else(|| {
-        ScriptError(format!(
-            "the model's region came out degenerate: {lo:?} to {hi:?}"
-        ))
-    })
+    Bounds::new(lo.map(|v| v - pad), hi.map(|v| v + pad))
+        .ok_or(RegionError::Degenerate { min: lo, max: hi })
 }
 
 /// Levels the emptiness check splits a region into (8^4 = 4096 cells at most).
@@ -213,12 +239,12 @@ pub fn region_is_empty(shape: &Shape, region: &Bounds) -> bool {
 }
 
 /// An error unless the model may have something inside `region`.
-pub fn ensure_not_empty(shape: &Shape, region: &Bounds) -> Result<(), ScriptError> {
+pub fn ensure_not_empty(shape: &Shape, region: &Bounds) -> Result<(), RegionError> {
     if region_is_empty(shape, region) {
-        return Err(ScriptError(format!(
-            "the model is empty in its region {:?} to {:?}: nothing there is inside it",
-            region.min, region.max
-        )));
+        return Err(RegionError::EmptyRegion {
+            min: region.min,
+            max: region.max,
+        });
     }
     Ok(())
 }
