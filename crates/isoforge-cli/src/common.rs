@@ -93,11 +93,10 @@ impl ModelArgs {
 
 /// A script error, with the command-line flag named where the value came from one.
 fn with_flag_hint(e: ScriptError) -> anyhow::Error {
+    if let Some(RuntimeCause::ParamOutOfRange { name, value, .. }) = e.runtime_cause() {
+        return anyhow!("{e} (given as --param {name}={value})");
+    }
     match &e {
-        ScriptError::Runtime {
-            cause: RuntimeCause::ParamOutOfRange { name, value, .. },
-            ..
-        } => anyhow!("{e} (given as --param {name}={value})"),
         ScriptError::UnknownParams { unknown, .. } => {
             // A misspelt --param is a mistake in the call, like an unknown flag.
             usage(format!("{e}; check --param {}", unknown.join(", --param ")))

@@ -145,8 +145,8 @@ pub enum ScriptError {
     Runtime {
         /// Where, innermost (inside the function that failed).
         at: Location,
-        /// What went wrong.
-        cause: RuntimeCause,
+        /// What went wrong (boxed: it is the largest part, and errors travel in `Result`s).
+        cause: Box<RuntimeCause>,
         /// The calls that led there, innermost first.
         calls: Vec<CallSite>,
     },

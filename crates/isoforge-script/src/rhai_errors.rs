@@ -57,7 +57,7 @@ pub fn eval_error(at: Locator, err: &EvalAltResult) -> ScriptError {
     }
     ScriptError::Runtime {
         at: location(at, pos),
-        cause,
+        cause: Box::new(cause),
         calls,
     }
 }
