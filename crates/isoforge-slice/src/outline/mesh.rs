@@ -234,8 +234,11 @@ mod tests {
     fn open_mesh_is_refused() {
         let mut m = octahedron();
         m.triangles.pop();
-        let msg = MeshSlicer::new(&m, 0.0).err().unwrap().to_string();
-        assert!(msg.contains("open"), "{msg}");
+        let e = MeshSlicer::new(&m, 0.0).err().unwrap();
+        assert!(
+            matches!(e, SliceError::Mesh(MeshProblem::Open { edges: 3, .. })),
+            "{e}"
+        );
     }
 
     #[test]
@@ -244,7 +247,10 @@ mod tests {
         for t in &mut m.triangles {
             t.swap(1, 2);
         }
-        let msg = MeshSlicer::new(&m, 0.0).err().unwrap().to_string();
-        assert!(msg.contains("inside out"), "{msg}");
+        let e = MeshSlicer::new(&m, 0.0).err().unwrap();
+        assert!(
+            matches!(e, SliceError::Mesh(MeshProblem::InsideOut { volume }) if volume < 0.0),
+            "{e}"
+        );
     }
 }
