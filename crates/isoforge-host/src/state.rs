@@ -5,8 +5,9 @@
 
 use crate::gcode::{code, word};
 
-/// What a resumed job must restore.
-#[derive(Clone, Debug, PartialEq)]
+/// What a resumed job must restore. Field names are the journal's keys.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MachineState {
     /// Hotend targets by tool, °C.
     pub hotends: Vec<f64>,
