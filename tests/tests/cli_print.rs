@@ -234,10 +234,10 @@ fn a_missing_port_is_a_clear_error() {
 #[test]
 fn bad_fault_specs_are_usage_errors_with_the_syntax() {
     let out = isoforge(&["fake-printer", "--faults", "corrupt=7"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        stderr.contains("corrupt") && stderr.contains("seed="),
+        stderr.contains("--faults") && stderr.contains("corrupt") && stderr.contains("seed="),
         "{stderr}"
     );
 }

@@ -10,7 +10,7 @@
 //! when resuming, with the G-code file itself.
 //!
 //! It is replaced atomically (temporary file, fsync, rename, fsync of the folder) at most
-//! every [`JOURNAL_CADENCE`] while lines are acknowledged, and at once when the job stops,
+//! every `JOURNAL_CADENCE` (250 ms) while lines are acknowledged, and at once when the job stops,
 //! so after a crash it names a line that was executed, never one that was not.
 
 use std::fs::{self, File};
@@ -27,10 +27,10 @@ use crate::state::MachineState;
 /// How often the journal is rewritten while a job runs: a crash costs at most this much
 /// progress (those lines are then executed again on resume), and 4 fsyncs a second cost
 /// nothing next to a serial link.
-pub const JOURNAL_CADENCE: Duration = Duration::from_millis(250);
+pub(crate) const JOURNAL_CADENCE: Duration = Duration::from_millis(250);
 
 /// How far above the print the nozzle lifts before homing X and Y on resume, mm.
-pub const RESUME_LIFT: f64 = 5.0;
+pub(crate) const RESUME_LIFT: f64 = 5.0;
 
 /// The `format` every journal starts with.
 const FORMAT: &str = "isoforge-journal";
@@ -524,7 +524,7 @@ pub fn check_can_start(path: &Path, restart: bool) -> Result<(), JournalError> {
 
 /// Replaces `path` with `contents` so that a crash leaves the old file or the new one, whole.
 /// Every journal write goes through here.
-pub fn write_durable(path: &Path, contents: &[u8]) -> std::io::Result<()> {
+pub(crate) fn write_durable(path: &Path, contents: &[u8]) -> std::io::Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -546,7 +546,7 @@ pub fn write_durable(path: &Path, contents: &[u8]) -> std::io::Result<()> {
 }
 
 /// Keeps a job's journal up to date.
-pub struct Journal {
+pub(crate) struct Journal {
     path: PathBuf,
     record: JournalRecord,
     last_write: Option<Instant>,
@@ -564,16 +564,6 @@ impl Journal {
         };
         j.write(Instant::now())?;
         Ok(j)
-    }
-
-    /// Where it is written.
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
-
-    /// The current record.
-    pub fn record(&self) -> &JournalRecord {
-        &self.record
     }
 
     /// Notes progress; writes when [`JOURNAL_CADENCE`] has passed since the last write.
