@@ -74,8 +74,9 @@ fn command_line_bounds_win() {
     let v = info_json(&[heart.to_str().unwrap(), "--bounds", "-2,-2,-2,2,2,3"]);
     assert_eq!(bounds_of(&v), [[-2.0; 3], [2.0, 2.0, 3.0]]);
     assert_eq!(v["bounds_source"], "command line");
+    // A malformed region is a mistake in the call: a usage error.
     let out = isoforge(&["info", heart.to_str().unwrap(), "--bounds", "1,1,1,0,0,0"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("--bounds"), "{}", stderr(&out));
 }
 
