@@ -8,8 +8,7 @@ use std::path::PathBuf;
 use divan::Bencher;
 use isoforge_mesh::{Mesh, MeshSettings, mesh_shape};
 use isoforge_script::{Model, load_file};
-use isoforge_slice::raster::GridSpec;
-use isoforge_slice::{FdmSettings, Profile, Source, render_layers, sl1, slice_gcode};
+use isoforge_slice::{FdmSettings, GridSpec, Profile, Source, render_layers, sl1, slice_gcode};
 
 fn main() {
     divan::main();

@@ -3,10 +3,29 @@
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 
-use anyhow::{Context as _, Result, bail};
+use anyhow::{Result, anyhow};
 use clap::Args;
 use isoforge_field::Bounds;
-use isoforge_script::Model;
+use isoforge_field::RegionError;
+use isoforge_script::{Model, RuntimeCause, ScriptError};
+
+/// A mistake in how the command was called (exit status 2, as clap's own errors), as opposed
+/// to work that failed (exit status 1). Put in an error's chain; `main` looks for it.
+#[derive(Debug)]
+pub struct UsageError(pub String);
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// A usage error with this message.
+pub fn usage(message: impl Into<String>) -> anyhow::Error {
+    anyhow::Error::new(UsageError(message.into()))
+}
 
 /// Flags every subcommand takes.
 #[derive(Args, Clone, Debug, Default)]
@@ -55,57 +74,81 @@ impl ModelArgs {
             .iter()
             .map(|p| parse_param(p))
             .collect::<Result<Vec<_>>>()?;
-        let model = isoforge_script::load_file(&self.model, &params)?;
-        let bounds = match &self.bounds {
-            Some(text) => parse_bounds(text)?,
+        let bounds = self.bounds.as_deref().map(parse_bounds).transpose()?;
+        let model = isoforge_script::load_file(&self.model, &params).map_err(with_flag_hint)?;
+        let bounds = match bounds {
+            Some(b) => b,
             None => match model.bounds {
                 Some(b) => b,
-                None => isoforge_field::find_bounds(&model.shape)
-                    .map_err(region_hint)
-                    .with_context(|| format!("{}: no region", self.model.display()))?,
+                None => isoforge_field::find_bounds(&model.shape).map_err(|e| {
+                    region_error(e).context(format!("{}: no region", self.model.display()))
+                })?,
             },
         };
         // A region with nothing in it would give an empty mesh or blank layers: say so.
         isoforge_field::ensure_not_empty(&model.shape, &bounds)
-            .with_context(|| self.model.display().to_string())?;
+            .map_err(|e| region_error(e).context(self.model.display().to_string()))?;
         Ok(LoadedModel { model, bounds })
     }
 }
 
-/// The region error, with how to give a region where none could be found.
-fn region_hint(e: isoforge_field::RegionError) -> anyhow::Error {
+/// A script error, with the command-line flag named where the value came from one.
+fn with_flag_hint(e: ScriptError) -> anyhow::Error {
+    if let Some(RuntimeCause::ParamOutOfRange { name, value, .. }) = e.runtime_cause() {
+        return anyhow!("{e} (given as --param {name}={value})");
+    }
+    match &e {
+        ScriptError::UnknownParams { unknown, .. } => {
+            // A misspelt --param is a mistake in the call, like an unknown flag.
+            usage(format!("{e}; check --param {}", unknown.join(", --param ")))
+        }
+        ScriptError::VmParams { .. } => usage(format!("{e}; drop --param")),
+        _ => anyhow::Error::new(e),
+    }
+}
+
+/// A region error, with the flag that gives a region where one is missing.
+fn region_error(e: RegionError) -> anyhow::Error {
     match e {
-        isoforge_field::RegionError::Unbounded { .. } => anyhow::anyhow!(
+        RegionError::Unbounded { .. } => anyhow!(
             "{e}. Give it a region: bounds([x0, y0, z0], [x1, y1, z1]) in the script, or \
              --bounds X0,Y0,Z0,X1,Y1,Z1"
         ),
-        e => e.into(),
+        _ => anyhow::Error::new(e),
     }
 }
 
 fn parse_param(text: &str) -> Result<(String, f64)> {
     let Some((name, value)) = text.split_once('=') else {
-        bail!("--param {text:?}: expected NAME=VALUE");
+        return Err(usage(format!("--param {text:?}: expected NAME=VALUE")));
     };
     let value: f64 = value
         .trim()
         .parse()
-        .with_context(|| format!("--param {text:?}: {value:?} is not a number"))?;
+        .map_err(|_| usage(format!("--param {text:?}: {value:?} is not a number")))?;
     Ok((name.trim().to_string(), value))
 }
 
-/// Parses `X0,Y0,Z0,X1,Y1,Z1`.
+/// Parses `X0,Y0,Z0,X1,Y1,Z1`; a malformed text is a usage error.
 pub fn parse_bounds(text: &str) -> Result<Bounds> {
+    let expected = || {
+        usage(format!(
+            "--bounds {text:?}: expected six numbers X0,Y0,Z0,X1,Y1,Z1"
+        ))
+    };
     let nums = text
         .split(',')
         .map(|s| s.trim().parse::<f64>())
         .collect::<Result<Vec<_>, _>>()
-        .with_context(|| format!("--bounds {text:?}: expected six numbers X0,Y0,Z0,X1,Y1,Z1"))?;
+        .map_err(|_| expected())?;
     if nums.len() != 6 {
-        bail!("--bounds {text:?}: expected six numbers X0,Y0,Z0,X1,Y1,Z1");
+        return Err(expected());
     }
-    Bounds::new([nums[0], nums[1], nums[2]], [nums[3], nums[4], nums[5]])
-        .with_context(|| format!("--bounds {text:?}: each minimum must be below its maximum"))
+    Bounds::new([nums[0], nums[1], nums[2]], [nums[3], nums[4], nums[5]]).ok_or_else(|| {
+        usage(format!(
+            "--bounds {text:?}: each minimum must be finite and below its maximum"
+        ))
+    })
 }
 
 /// A progress bar on a terminal; hidden when piped, `--quiet` or `--json`.

@@ -61,7 +61,15 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(err) => {
             eprintln!("error: {err:#}");
-            ExitCode::from(1)
+            exit_code(&err)
         }
     }
+}
+
+/// 2 for a usage error anywhere in the chain (see [`common::UsageError`]), else 1.
+fn exit_code(err: &anyhow::Error) -> ExitCode {
+    let usage = err
+        .chain()
+        .any(|cause| cause.downcast_ref::<common::UsageError>().is_some());
+    ExitCode::from(if usage { 2 } else { 1 })
 }

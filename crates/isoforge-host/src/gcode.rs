@@ -11,7 +11,7 @@ use thiserror::Error;
 
 /// Marlin's `MAX_CMD_SIZE` is 96 bytes including the terminating NUL: anything longer is cut
 /// silently, so a longer framed line must be refused before it is sent.
-pub const MAX_FRAMED_LEN: usize = 95;
+pub(crate) const MAX_FRAMED_LEN: usize = 95;
 
 /// One command as the printer will execute it.
 #[derive(Clone, Debug, PartialEq)]
@@ -76,7 +76,7 @@ pub enum GcodeError {
 }
 
 /// The XOR of every byte, as RepRap firmware computes it over `N<n> <command>`.
-pub fn checksum(bytes: &[u8]) -> u8 {
+pub(crate) fn checksum(bytes: &[u8]) -> u8 {
     bytes.iter().fold(0, |acc, b| acc ^ b)
 }
 
@@ -100,7 +100,7 @@ pub fn frame(line: u64, command: &str, source_line: usize) -> Result<String, Gco
 /// Removes `;` comments and `( ... )` comments and trims the rest.
 ///
 /// Returns `None` for an unterminated `(` comment, which Marlin would also misread.
-pub fn strip_comments(line: &str) -> Option<String> {
+pub(crate) fn strip_comments(line: &str) -> Option<String> {
     let mut out = String::with_capacity(line.len());
     let mut depth = 0usize;
     for c in line.chars() {
@@ -150,7 +150,7 @@ pub fn read_file(path: &Path) -> Result<Program, GcodeError> {
 ///
 /// Every command is checked here so that no error can surface halfway through a print: it
 /// must be ASCII without `*` (the checksum marker), and framed with the largest line number
-/// this job can reach it must fit [`MAX_FRAMED_LEN`].
+/// this job can reach it must fit `MAX_FRAMED_LEN` (95 bytes).
 pub fn parse(text: &str) -> Result<Program, GcodeError> {
     let mut program = Program::default();
     let mut layers = LayerFinder::default();
@@ -200,7 +200,7 @@ pub fn parse(text: &str) -> Result<Program, GcodeError> {
 }
 
 /// Line numbers a resume prelude may add in front of the remaining commands.
-pub const PRELUDE_ALLOWANCE: u64 = 64;
+pub(crate) const PRELUDE_ALLOWANCE: u64 = 64;
 
 impl Program {
     /// The layer that command `index` belongs to.
@@ -223,14 +223,14 @@ fn layer_comment(raw: &str) -> Option<u32> {
 }
 
 /// The value of one word (`Z` in `G1 Z0.3 F600`).
-pub fn word(cmd: &str, letter: char) -> Option<f64> {
+pub(crate) fn word(cmd: &str, letter: char) -> Option<f64> {
     cmd.split_ascii_whitespace()
         .skip(1)
         .find_map(|w| w.strip_prefix(letter).and_then(|v| v.parse().ok()))
 }
 
 /// The command's code (`G1`, `M104`, `T0`), upper-cased, without leading zeros.
-pub fn code(cmd: &str) -> String {
+pub(crate) fn code(cmd: &str) -> String {
     let first = cmd.split_ascii_whitespace().next().unwrap_or("");
     let mut chars = first.chars();
     let Some(letter) = chars.next() else {

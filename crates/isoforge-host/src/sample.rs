@@ -12,7 +12,7 @@ use std::fmt::Write as _;
 
 /// Writes a job of `layers` layers with `segments` perimeter segments each; the command
 /// count grows as about `layers * (segments + 2 * infill + 12)`.
-pub fn vase(layers: u32, segments: u32) -> String {
+pub(crate) fn vase(layers: u32, segments: u32) -> String {
     let mut g = String::new();
     let layer_h = 0.2;
     let filament_area = std::f64::consts::PI * 0.875 * 0.875;

@@ -5,8 +5,9 @@
 
 use crate::gcode::{code, word};
 
-/// What a resumed job must restore.
-#[derive(Clone, Debug, PartialEq)]
+/// What a resumed job must restore. Field names are the journal's keys.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MachineState {
     /// Hotend targets by tool, °C.
     pub hotends: Vec<f64>,
@@ -52,7 +53,7 @@ impl Default for MachineState {
 
 impl MachineState {
     /// The state after `commands` ran from power-on.
-    pub fn replay<'a>(commands: impl IntoIterator<Item = &'a str>) -> MachineState {
+    pub(crate) fn replay<'a>(commands: impl IntoIterator<Item = &'a str>) -> MachineState {
         let mut s = MachineState::default();
         for c in commands {
             s.apply(c);
@@ -61,7 +62,7 @@ impl MachineState {
     }
 
     /// Updates the state for one executed command.
-    pub fn apply(&mut self, cmd: &str) {
+    pub(crate) fn apply(&mut self, cmd: &str) {
         let c = code(cmd);
         match c.as_str() {
             "G0" | "G1" | "G2" | "G3" => {

@@ -1,4 +1,4 @@
-//! Drives the [`Protocol`] over a serial port: connect, stream, report progress, pause,
+//! Drives the protocol state machine over a serial port: connect, stream, report progress, pause,
 //! resume, cancel, and keep the journal.
 
 use std::collections::VecDeque;

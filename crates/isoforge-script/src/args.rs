@@ -15,6 +15,15 @@ pub fn fail(message: impl Into<String>) -> Box<EvalAltResult> {
     ))
 }
 
+/// A runtime error with a typed cause, which the loader reports as that cause (see
+/// `rhai_errors::describe`); rhai fills in the position as for [`fail`].
+pub fn fail_with(cause: crate::RuntimeCause) -> Box<EvalAltResult> {
+    Box::new(EvalAltResult::ErrorRuntime(
+        Dynamic::from(cause),
+        Position::NONE,
+    ))
+}
+
 /// A script type's name as users see it.
 pub fn type_name(d: &Dynamic) -> &'static str {
     if d.is::<Shape>() {

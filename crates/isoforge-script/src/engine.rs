@@ -13,7 +13,7 @@ use crate::params::Shared;
 pub const MAX_OPERATIONS: u64 = 1_000_000;
 
 /// Nested function calls. Rhai needs a few kilobytes of native stack per level in debug
-/// builds; the script runs on a thread with [`SCRIPT_STACK`] bytes, ample for this depth.
+/// builds; the script runs on a thread with `SCRIPT_STACK` bytes, ample for this depth.
 pub const MAX_CALL_LEVELS: usize = 200;
 
 /// The stack of the thread a script runs on (reserved address space, not memory used).

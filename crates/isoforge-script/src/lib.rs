@@ -19,8 +19,8 @@
 //! limit, no `import` and no `eval`, and output to stderr only.
 //!
 //! The path: source → `notation` (math precedence for `^`) → rhai compile and run with the
-//! bindings of `ops`, `library` and `params` → the resulting `Shape`, or a `ScriptError`
-//! located at `path:line:column` by `errors`. A model without `bounds(..)` gets its region
+//! bindings of `ops`, `library` and `params` → the resulting `Shape`, or a [`ScriptError`]
+//! located at `path:line:column` by `rhai_errors`. A model without `bounds(..)` gets its region
 //! from `isoforge_field::find_bounds`: finding a box needs no script, so it lives there.
 
 use std::path::Path;
@@ -31,13 +31,15 @@ use rhai::Dynamic;
 
 mod args;
 mod engine;
-mod errors;
+mod error;
 mod library;
 mod notation;
 mod ops;
 mod params;
+mod rhai_errors;
 
 pub use engine::{MAX_CALL_LEVELS, MAX_OPERATIONS};
+pub use error::{CallSite, Location, RuntimeCause, ScriptError};
 
 /// A declared parameter.
 #[derive(Clone, Debug, PartialEq)]
@@ -63,21 +65,15 @@ pub struct Model {
     pub params: Vec<Param>,
 }
 
-/// A script failed; the message names the file, line and column ("path:line:col: what").
-#[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct ScriptError(pub String);
-
 /// Loads a model file (`.rhai` script, or a `.vm` expression file) with parameter overrides.
 pub fn load_file(path: &Path, params: &[(String, f64)]) -> Result<Model, ScriptError> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| ScriptError(format!("{}: cannot read: {e}", path.display())))?;
-    let text = String::from_utf8(bytes).map_err(|e| {
-        ScriptError(format!(
-            "{}: not a text file (invalid UTF-8 at byte {})",
-            path.display(),
-            e.utf8_error().valid_up_to()
-        ))
+    let bytes = std::fs::read(path).map_err(|source| ScriptError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| ScriptError::NotText {
+        path: path.to_path_buf(),
+        byte: e.utf8_error().valid_up_to(),
     })?;
     if path
         .extension()
@@ -92,13 +88,16 @@ pub fn load_file(path: &Path, params: &[(String, f64)]) -> Result<Model, ScriptE
 /// Loads a `.vm` expression file (one operation per line; see `isoforge_field::vm`).
 pub fn load_vm(path: &Path, text: &str, params: &[(String, f64)]) -> Result<Model, ScriptError> {
     if let Some((name, _)) = params.first() {
-        return Err(ScriptError(format!(
-            "{}: --param {name}: a .vm model has no parameters",
-            path.display()
-        )));
+        return Err(ScriptError::VmParams {
+            path: path.to_path_buf(),
+            name: name.clone(),
+        });
     }
-    let shape = isoforge_field::vm::parse_vm(text)
-        .map_err(|e| ScriptError(format!("{}:{}: {}", path.display(), e.line, e.message)))?;
+    let shape = isoforge_field::vm::parse_vm(text).map_err(|e| ScriptError::Vm {
+        path: path.to_path_buf(),
+        line: e.line,
+        message: e.message,
+    })?;
     Ok(Model {
         shape,
         bounds: None,
@@ -118,17 +117,15 @@ pub fn load_script(
             .name("isoforge-script".into())
             .stack_size(engine::SCRIPT_STACK)
             .spawn_scoped(scope, || run(path, source, params))
-            .map_err(|e| {
-                ScriptError(format!(
-                    "{}: cannot start the script thread: {e}",
-                    path.display()
-                ))
+            .map_err(|e| ScriptError::Interpreter {
+                path: path.to_path_buf(),
+                what: format!("cannot start the script thread: {e}"),
             })?;
         worker.join().unwrap_or_else(|_| {
-            Err(ScriptError(format!(
-                "{}: the script interpreter crashed (a bug in isoforge; please report it)",
-                path.display()
-            )))
+            Err(ScriptError::Interpreter {
+                path: path.to_path_buf(),
+                what: "the script interpreter crashed (a bug in isoforge; please report it)".into(),
+            })
         })
     })
 }
@@ -140,36 +137,29 @@ fn run(path: &Path, source: &str, params: &[(String, f64)]) -> Result<Model, Scr
     }));
     let engine = engine::build(&shared);
     let Some(last_line) = last_code_line(source) else {
-        return Err(ScriptError(format!(
-            "{}: the script is empty: it must end with a shape, such as Sphere(1)",
-            path.display()
-        )));
+        return Err(ScriptError::Empty {
+            path: path.to_path_buf(),
+        });
     };
     let rewritten = notation::rewrite(source);
-    let at = errors::Locator {
+    let at = rhai_errors::Locator {
         path,
         map: &rewritten,
     };
     let ast = engine
         .compile(&rewritten.source)
-        .map_err(|e| errors::parse_error(at, &e))?;
+        .map_err(|e| rhai_errors::parse_error(at, &e))?;
     let result: Dynamic = engine
         .eval_ast(&ast)
-        .map_err(|e| errors::eval_error(at, &e))?;
+        .map_err(|e| rhai_errors::eval_error(at, &e))?;
     let declared = std::mem::take(&mut *shared.lock().unwrap_or_else(|e| e.into_inner()));
     let unknown = params::undeclared(&declared);
     if !unknown.is_empty() {
-        let known: Vec<&str> = declared.params.iter().map(|p| p.name.as_str()).collect();
-        return Err(ScriptError(format!(
-            "{}: --param {}: the script declares no such parameter (it declares: {})",
-            path.display(),
-            unknown.join(", "),
-            if known.is_empty() {
-                "none".to_string()
-            } else {
-                known.join(", ")
-            }
-        )));
+        return Err(ScriptError::UnknownParams {
+            path: path.to_path_buf(),
+            unknown,
+            declared: declared.params.iter().map(|p| p.name.clone()).collect(),
+        });
     }
     let shape = model_shape(path, last_line, result)?;
     Ok(Model {
@@ -184,23 +174,19 @@ fn model_shape(path: &Path, last_line: usize, result: Dynamic) -> Result<Shape, 
     if let Some(s) = result.clone().try_cast::<Shape>() {
         return Ok(s);
     }
-    let what = if let Some(v) = args::as_number(&result) {
-        format!("the model evaluated to a number ({v}), not a shape")
-    } else if result.is_unit() {
-        "the model evaluated to nothing, not a shape (does the last statement end with `;` \
-         or is it a `let`?)"
-            .to_string()
+    let found = if let Some(v) = args::as_number(&result) {
+        format!("a number ({v})")
     } else {
-        format!(
-            "the model evaluated to {}, not a shape",
-            args::type_name(&result)
-        )
+        args::type_name(&result).to_string()
     };
-    Err(ScriptError(format!(
-        "{}:{last_line}: {what}: the script's last expression must be the model, \
-         such as Sphere(1)",
-        path.display()
-    )))
+    Err(ScriptError::NotAShape {
+        at: Location {
+            path: path.to_path_buf(),
+            line: Some(last_line),
+            column: None,
+        },
+        found,
+    })
 }
 
 /// The 1-based number of the last line holding code (not blank, not only a `//` comment);

@@ -6,13 +6,13 @@ use std::sync::{Arc, Mutex};
 use isoforge_field::Bounds;
 use rhai::{Array, Dynamic, Engine, FLOAT, INT, ImmutableString};
 
-use crate::Param;
-use crate::args::{RhaiResult, fail, number_arg, numbers_arg};
+use crate::args::{RhaiResult, fail, fail_with, number_arg, numbers_arg};
+use crate::{Param, RuntimeCause};
 
 /// What the script declared, and the overrides it is run with.
 #[derive(Default, Debug)]
 pub struct Declared {
-    /// `--param` overrides, by name.
+    /// Parameter values the loader was given, by name.
     pub overrides: Vec<(String, f64)>,
     /// Parameters in the order the script declared them.
     pub params: Vec<Param>,
@@ -93,9 +93,12 @@ fn declare(
             )));
         }
         if !(lo..=hi).contains(&value) {
-            return Err(fail(format!(
-                "param \"{name}\" = {value} (from --param) is outside its range [{lo}, {hi}]"
-            )));
+            return Err(fail_with(RuntimeCause::ParamOutOfRange {
+                name: name.to_string(),
+                value,
+                min: lo,
+                max: hi,
+            }));
         }
     }
     match declared.params.iter_mut().find(|p| p.name == name) {
@@ -123,7 +126,7 @@ fn declare(
     )
 }
 
-/// The `--param` names the script never declared: probably typos.
+/// The override names the script never declared: probably typos.
 pub fn undeclared(declared: &Declared) -> Vec<String> {
     declared
         .overrides

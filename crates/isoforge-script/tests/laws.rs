@@ -62,7 +62,7 @@ proptest! {
     fn any_script_loads_or_fails_with_a_located_message(src in source()) {
         match load_script(Path::new("fuzz.rhai"), &src, &[]) {
             Ok(_) => {}
-            Err(e) => prop_assert!(e.0.starts_with("fuzz.rhai"), "{}", e.0),
+            Err(e) => prop_assert!(e.to_string().starts_with("fuzz.rhai"), "{}", e),
         }
     }
 

@@ -81,11 +81,7 @@ pub fn place_layers(
             o
         })
         .collect();
-    let (lo, hi) = outlines_bbox(&outlines).ok_or_else(|| {
-        SliceError::Empty(
-            "no layer has any material: the model is empty or too thin to print".into(),
-        )
-    })?;
+    let (lo, hi) = outlines_bbox(&outlines).ok_or(SliceError::NoLayers)?;
     let offset = [
         bed[0] * 0.5 - (lo[0] + hi[0]) * 0.5,
         bed[1] * 0.5 - (lo[1] + hi[1]) * 0.5,
@@ -214,23 +210,17 @@ fn check_fits(placed: &PlacedLayers, s: &FdmSettings) -> Result<(), SliceError> 
     };
     let height = placed.layers.last().map_or(0.0, |l| l.top);
     if size[0] + margin > s.bed_size[0] || size[1] + margin > s.bed_size[1] {
-        return Err(SliceError::TooLarge(format!(
-            "the model is {:.1} x {:.1} mm ({:.1} x {:.1} mm with its skirt), larger than the \
-             {:.0} x {:.0} mm bed: scale the model down, or set a larger bed_size",
-            size[0],
-            size[1],
-            size[0] + margin,
-            size[1] + margin,
-            s.bed_size[0],
-            s.bed_size[1]
-        )));
+        return Err(SliceError::LargerThanBed {
+            size,
+            with_skirt: [size[0] + margin, size[1] + margin],
+            bed: s.bed_size,
+        });
     }
     if height > s.max_height {
-        return Err(SliceError::TooLarge(format!(
-            "the model is {height:.1} mm tall, more than the printer's {:.0} mm max_height: \
-             scale it down or set max_height",
-            s.max_height
-        )));
+        return Err(SliceError::TallerThanPrinter {
+            height,
+            max_height: s.max_height,
+        });
     }
     Ok(())
 }

@@ -32,11 +32,13 @@ pub fn region_area(r: &Region) -> f64 {
 }
 
 /// The area enclosed by oriented contours (holes count negative).
+#[cfg(test)]
 pub fn contours_area(cs: &[Contour]) -> f64 {
     cs.iter().map(|c| signed_area(c)).sum()
 }
 
 /// The length of a polyline (`closed` adds the closing edge).
+#[cfg(test)]
 pub fn path_length(p: &[Point], closed: bool) -> f64 {
     let mut l: f64 = p.windows(2).map(|w| dist(w[0], w[1])).sum();
     if closed && p.len() > 2 {

@@ -12,47 +12,180 @@
 //! let job = slice_gcode(&Source::field(&sphere, bounds), &settings, &|_, _| {}).unwrap();
 //! std::fs::write("sphere.gcode", job.gcode).unwrap();
 //! ```
+//!
+//! The public surface: a [`Source`] (field or mesh), a [`Profile`] read into
+//! [`FdmSettings`] or [`ResinSettings`], [`slice_gcode`] and [`render_layers`], the archive
+//! writers in [`sl1`] and [`svx`], and the G-code checker in [`check`]. Outlines, perimeters,
+//! skins, infill and path ordering are internal stages.
 
 pub mod check;
-pub mod fdm;
-pub mod gcode;
-pub mod geom;
-pub mod infill;
-pub mod outline;
-pub mod paths;
-pub mod perimeters;
-pub mod profile;
-pub mod raster;
-pub mod skins;
+mod fdm;
+mod gcode;
+mod geom;
+mod infill;
+mod outline;
+mod paths;
+mod perimeters;
+mod profile;
+mod raster;
+mod skins;
 pub mod sl1;
-pub mod source;
+mod source;
 pub mod svx;
 
-pub use fdm::{GcodeJob, slice_gcode};
-pub use geom::{Contour, Point, Region};
-pub use profile::{FdmSettings, InfillPattern, Profile, ResinSettings};
-pub use raster::{LayerImages, render_layers};
-pub use source::Source;
+#[cfg(test)]
+mod region_agreement_tests;
+
+pub use fdm::{GcodeJob, Progress, slice_gcode};
+pub use gcode::GcodeStats;
+pub use profile::keys;
+pub use profile::{
+    FdmSettings, InfillPattern, Origin, PLACEHOLDERS, Profile, ProfileError, ProfileErrorKind,
+    ResinSettings, Technology,
+};
+pub use raster::{GridSpec, LayerImages, PixelGrid, render_layers};
+pub use source::{Layer, Source};
 
 use std::path::PathBuf;
 
-/// Slicing failed; the message says what to fix.
+/// Why a mesh cannot be sliced.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum MeshProblem {
+    /// No triangles at all.
+    #[error("the mesh has no triangles")]
+    NoTriangles,
+    /// A vertex with a coordinate that is not a number.
+    #[error("vertex {index} has a coordinate that is not a number: {position:?}")]
+    NotFinite {
+        /// The vertex's index.
+        index: usize,
+        /// Its coordinates.
+        position: [f32; 3],
+    },
+    /// A triangle naming a vertex that does not exist.
+    #[error("triangle {triangle} refers to a vertex beyond the {vertices} vertices")]
+    BadIndex {
+        /// The triangle's index.
+        triangle: usize,
+        /// How many vertices there are.
+        vertices: usize,
+    },
+    /// An edge two triangles run the same way: inconsistent winding, or not manifold.
+    #[error(
+        "the edge at ({:.3}, {:.3}, {:.3}) is used twice in the same direction: triangles are \
+         wound inconsistently or the mesh is not manifold; repair it before slicing",
+        at[0], at[1], at[2]
+    )]
+    NotManifold {
+        /// One end of the edge.
+        at: [f64; 3],
+    },
+    /// Edges with a triangle on one side only.
+    #[error(
+        "the mesh is open: {edges} edges have only one triangle (one near ({:.3}, {:.3}, \
+         {:.3})); close the holes before slicing",
+        near[0], near[1], near[2]
+    )]
+    Open {
+        /// How many such edges.
+        edges: usize,
+        /// One end of one of them.
+        near: [f64; 3],
+    },
+    /// Triangles wound clockwise seen from outside.
+    #[error(
+        "the mesh is inside out (its volume is {volume:.3} mm³: triangles wind clockwise seen \
+         from outside); flip its normals before slicing"
+    )]
+    InsideOut {
+        /// The (negative) volume.
+        volume: f64,
+    },
+    /// A closed mesh around nothing.
+    #[error("the mesh encloses no volume")]
+    NoVolume,
+}
+
+/// Slicing failed; each variant carries the facts, and its message says what to fix.
 #[derive(Debug, thiserror::Error)]
 pub enum SliceError {
-    /// A profile or `--set` problem (names the key and the file).
-    #[error("{0}")]
-    Profile(String),
-    /// A mesh that cannot be sliced (open, inside out, ...).
+    /// A profile value is missing, unknown or out of range.
+    #[error(transparent)]
+    Profile(#[from] ProfileError),
+    /// A mesh that cannot be sliced.
     #[error("mesh: {0}")]
-    Mesh(String),
-    /// The model does not fit the printer.
-    #[error("{0}")]
-    TooLarge(String),
-    /// The model has no material in its region.
-    #[error("{0}")]
-    Empty(String),
+    Mesh(#[from] MeshProblem),
+    /// A model with no material inside its region.
+    #[error(
+        "the model has no material inside its region {min:?} .. {max:?}; check the model \
+         (negative is inside) or its region"
+    )]
+    EmptyRegion {
+        /// The region's low corner.
+        min: [f64; 3],
+        /// The region's high corner.
+        max: [f64; 3],
+    },
+    /// A mesh without vertices.
+    #[error("the mesh has no vertices")]
+    EmptyMesh,
+    /// Every layer came out empty.
+    #[error("no layer has any material: the model is empty or too thin to print")]
+    NoLayers,
+    /// The model (with its skirt) is wider than the bed.
+    #[error(
+        "the model is {:.1} x {:.1} mm ({:.1} x {:.1} mm with its skirt), larger than the \
+         {:.0} x {:.0} mm bed: scale the model down, or set a larger bed_size",
+        size[0], size[1], with_skirt[0], with_skirt[1], bed[0], bed[1]
+    )]
+    LargerThanBed {
+        /// The model's footprint, mm.
+        size: [f64; 2],
+        /// The footprint with the skirt, mm.
+        with_skirt: [f64; 2],
+        /// The bed, mm.
+        bed: [f64; 2],
+    },
+    /// The model is taller than the printer can print.
+    #[error(
+        "the model is {height:.1} mm tall, more than the printer's {max_height:.0} mm \
+         max_height: scale it down or set max_height"
+    )]
+    TallerThanPrinter {
+        /// The model's height, mm.
+        height: f64,
+        /// The printable height, mm.
+        max_height: f64,
+    },
+    /// The model reaches the edge of the resin display.
+    #[error(
+        "the model is larger than the {:.1} x {:.1} mm display (layer {layer} reaches its \
+         edge): scale the model down",
+        display[0], display[1]
+    )]
+    LargerThanDisplay {
+        /// The display, mm.
+        display: [f64; 2],
+        /// The first layer that reaches its edge.
+        layer: usize,
+    },
+    /// Layer images of this size cannot be made.
+    #[error(
+        "layer images of {width} x {height} pixels of {pixel} mm, {layer_height} mm apart, \
+         cannot be made"
+    )]
+    BadGrid {
+        /// Pixels across.
+        width: u64,
+        /// Pixels down.
+        height: u64,
+        /// Pixel size, mm.
+        pixel: f64,
+        /// Layer height, mm.
+        layer_height: f64,
+    },
     /// A file could not be read or written.
-    #[error("{path}: {source}")]
+    #[error("{}: {source}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -60,6 +193,11 @@ pub enum SliceError {
         source: std::io::Error,
     },
     /// Writing an archive or image failed.
-    #[error("{0}")]
-    Encode(String),
+    #[error("{what}: {message}")]
+    Encode {
+        /// What was being written ("SL1 archive", "PNG").
+        what: &'static str,
+        /// The encoder's message.
+        message: String,
+    },
 }

@@ -101,10 +101,14 @@ pub fn render_layers(
     let pixel = match spec {
         GridSpec::Display { pixel, .. } | GridSpec::Fit { pixel } => pixel,
     };
-    if !(pixel > 0.0 && pixel.is_finite() && layer_height > 0.0) {
-        return Err(SliceError::Profile(
-            "pixel_size and layer_height must be positive".into(),
-        ));
+    let bad_grid = |width: u64, height: u64| SliceError::BadGrid {
+        width,
+        height,
+        pixel,
+        layer_height,
+    };
+    if !(pixel > 0.0 && pixel.is_finite() && layer_height > 0.0 && layer_height.is_finite()) {
+        return Err(bad_grid(0, 0));
     }
     // Outlines (used for meshes) at a quarter-pixel resolution.
     let model = source.prepare(pixel * 0.5, pixel * 0.1)?;
@@ -119,9 +123,7 @@ pub fn render_layers(
         ),
     };
     if width == 0 || height == 0 || width as u64 * height as u64 > 1 << 31 {
-        return Err(SliceError::Profile(format!(
-            "an image of {width} x {height} pixels cannot be made"
-        )));
+        return Err(bad_grid(width.into(), height.into()));
     }
     let grid = PixelGrid {
         width,
@@ -154,12 +156,10 @@ pub fn render_layers(
     for (k, r) in results.into_iter().enumerate() {
         let (png, area, touches) = r?;
         if touches && matches!(spec, GridSpec::Display { .. }) {
-            return Err(SliceError::TooLarge(format!(
-                "the model is larger than the {:.1} x {:.1} mm display (layer {k} reaches its \
-                 edge): scale the model down",
-                width as f64 * pixel,
-                height as f64 * pixel
-            )));
+            return Err(SliceError::LargerThanDisplay {
+                display: [width as f64 * pixel, height as f64 * pixel],
+                layer: k,
+            });
         }
         pngs.push(png);
         areas.push(area);
@@ -219,7 +219,7 @@ pub fn render_one(model: &Sliceable, grid: &PixelGrid, layer: &Layer) -> Vec<u8>
 }
 
 /// Fills oriented contours (non-zero winding) with anti-aliasing.
-pub fn render_outline(contours: &[crate::Contour], grid: &PixelGrid) -> Vec<u8> {
+pub fn render_outline(contours: &[crate::geom::Contour], grid: &PixelGrid) -> Vec<u8> {
     let mut mask = match tiny_skia::Mask::new(grid.width, grid.height) {
         Some(m) => m,
         None => return vec![0; grid.width as usize * grid.height as usize],
@@ -357,7 +357,10 @@ impl FieldRaster<'_> {
 /// flat, and PNG's filters do most of the work).
 pub fn encode_png(img: &[u8], width: u32, height: u32) -> Result<Vec<u8>, SliceError> {
     let mut buf = Vec::new();
-    let err = |e: png::EncodingError| SliceError::Encode(format!("PNG: {e}"));
+    let err = |e: png::EncodingError| SliceError::Encode {
+        what: "PNG",
+        message: e.to_string(),
+    };
     {
         let mut enc = png::Encoder::new(&mut buf, width, height);
         enc.set_color(png::ColorType::Grayscale);

@@ -20,7 +20,7 @@ pub const THUMBNAIL: (u32, u32) = (400, 400);
 
 /// The exposure of layer `k` (0-based): the first exposure, fading linearly to the
 /// normal one over `faded_layers` layers.
-pub fn exposure(r: &ResinSettings, k: usize) -> f64 {
+pub(crate) fn exposure(r: &ResinSettings, k: usize) -> f64 {
     if k == 0 || r.faded_layers == 0 {
         return if k == 0 {
             r.first_exposure_time
@@ -37,7 +37,7 @@ pub fn exposure(r: &ResinSettings, k: usize) -> f64 {
 
 /// The archive's figures.
 #[derive(Copy, Clone, Debug, PartialEq)]
-pub struct Sl1Figures {
+pub(crate) struct Sl1Figures {
     /// Estimated print time, s.
     pub print_seconds: f64,
     /// Resin used, ml.
@@ -45,7 +45,7 @@ pub struct Sl1Figures {
 }
 
 /// The figures an SL1 archive states for these layers.
-pub fn figures(images: &LayerImages, r: &ResinSettings) -> Sl1Figures {
+pub(crate) fn figures(images: &LayerImages, r: &ResinSettings) -> Sl1Figures {
     let n = images.layers.len();
     let print_seconds: f64 = (0..n).map(|k| exposure(r, k) + FAST_TILT_SECONDS).sum();
     let used_ml = images
@@ -62,7 +62,7 @@ pub fn figures(images: &LayerImages, r: &ResinSettings) -> Sl1Figures {
 }
 
 /// `config.ini`.
-pub fn config_ini(images: &LayerImages, r: &ResinSettings, job: &str) -> String {
+pub(crate) fn config_ini(images: &LayerImages, r: &ResinSettings, job: &str) -> String {
     let f = figures(images, r);
     let n = images.layers.len();
     let fade = r.faded_layers.min(n.saturating_sub(1));
@@ -94,7 +94,7 @@ pub fn config_ini(images: &LayerImages, r: &ResinSettings, job: &str) -> String 
 }
 
 /// `prusaslicer.ini`: the settings in PrusaSlicer's names.
-pub fn prusaslicer_ini(images: &LayerImages, r: &ResinSettings) -> String {
+pub(crate) fn prusaslicer_ini(images: &LayerImages, r: &ResinSettings) -> String {
     let g = &images.grid;
     let orientation = if g.width <= g.height {
         "portrait"
@@ -122,7 +122,10 @@ pub fn prusaslicer_ini(images: &LayerImages, r: &ResinSettings) -> String {
 }
 
 fn zerr(e: impl std::fmt::Display) -> SliceError {
-    SliceError::Encode(format!("SL1 archive: {e}"))
+    SliceError::Encode {
+        what: "SL1 archive",
+        message: e.to_string(),
+    }
 }
 
 /// Writes the archive. `job` names the layer images (`<job>00000.png`) and `jobDir`.

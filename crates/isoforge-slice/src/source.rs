@@ -34,12 +34,9 @@ impl<'a> Source<'a> {
         match *self {
             Source::Field(shape, bounds) => {
                 let slicer = FieldSlicer::new(shape, bounds, cell, tolerance);
-                let (z0, z1) = slicer.z_extent(cell).ok_or_else(|| {
-                    SliceError::Empty(format!(
-                        "the model has no material inside its bounds {:?} .. {:?}; check the \
-                         model (negative is inside) or pass --bounds",
-                        bounds.min, bounds.max
-                    ))
+                let (z0, z1) = slicer.z_extent(cell).ok_or(SliceError::EmptyRegion {
+                    min: bounds.min,
+                    max: bounds.max,
                 })?;
                 Ok(Sliceable {
                     inner: Inner::Field(slicer),
@@ -48,8 +45,7 @@ impl<'a> Source<'a> {
             }
             Source::Mesh(mesh) => {
                 let slicer = MeshSlicer::new(mesh, tolerance)?;
-                let (lo, hi) = mesh_bounds(mesh)
-                    .ok_or_else(|| SliceError::Empty("the mesh has no vertices".into()))?;
+                let (lo, hi) = mesh_bounds(mesh).ok_or(SliceError::EmptyMesh)?;
                 Ok(Sliceable {
                     inner: Inner::Mesh(slicer),
                     z_range: (lo[2], hi[2]),

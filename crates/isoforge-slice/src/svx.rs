@@ -10,7 +10,7 @@ use crate::SliceError;
 use crate::raster::LayerImages;
 
 /// `manifest.xml` for these slices: voxel size and origin in metres.
-pub fn manifest(images: &LayerImages, voxel_mm: f64, origin_mm: [f64; 3]) -> String {
+pub(crate) fn manifest(images: &LayerImages, voxel_mm: f64, origin_mm: [f64; 3]) -> String {
     let g = &images.grid;
     format!(
         r#"<?xml version="1.0" encoding="UTF-8"?>
@@ -35,7 +35,10 @@ pub fn manifest(images: &LayerImages, voxel_mm: f64, origin_mm: [f64; 3]) -> Str
 }
 
 fn zerr(e: impl std::fmt::Display) -> SliceError {
-    SliceError::Encode(format!("SVX archive: {e}"))
+    SliceError::Encode {
+        what: "SVX archive",
+        message: e.to_string(),
+    }
 }
 
 /// Writes the archive.

@@ -161,7 +161,10 @@ fn a_model_larger_than_the_bed_is_refused() {
     let s = settings(&["bed_size=15,15"]);
     let k = sphere(10.0);
     match slice_gcode(&Source::field(&k.shape, k.bounds), &s, &|_, _| {}) {
-        Err(SliceError::TooLarge(msg)) => assert!(msg.contains("bed"), "{msg}"),
+        Err(SliceError::LargerThanBed { size, bed, .. }) => {
+            assert_eq!(bed, [15.0, 15.0]);
+            assert!(size[0] > 19.0 && size[1] > 19.0, "{size:?}");
+        }
         other => panic!("expected a size error, got {:?}", other.map(|j| j.stats)),
     }
 }

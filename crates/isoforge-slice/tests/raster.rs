@@ -5,8 +5,7 @@ mod common;
 
 use common::{Known, sphere, torus};
 use isoforge_mesh::{MeshSettings, mesh_shape};
-use isoforge_slice::raster::{GridSpec, render_layers};
-use isoforge_slice::{SliceError, Source};
+use isoforge_slice::{GridSpec, SliceError, Source, render_layers};
 
 const PIXEL: f64 = 0.05;
 
@@ -75,7 +74,9 @@ fn a_model_larger_than_the_display_is_refused() {
         display(),
         &|_, _| {},
     ) {
-        Err(SliceError::TooLarge(m)) => assert!(m.contains("display"), "{m}"),
+        Err(SliceError::LargerThanDisplay { display, .. }) => {
+            assert!(display[0] < 60.0, "{display:?}");
+        }
         Err(e) => panic!("{e}"),
         Ok(_) => panic!("a 60 mm sphere fit a 45 mm display"),
     }

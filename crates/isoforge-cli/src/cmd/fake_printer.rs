@@ -9,7 +9,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use isoforge_host::fake::{FakeConfig, FakePrinter, Faults, FirmwareConfig};
 
-use crate::common::Global;
+use crate::common::{Global, usage};
 
 /// Arguments of `isoforge fake-printer`.
 #[derive(Args, Debug)]
@@ -46,7 +46,7 @@ pub struct FakePrinterArgs {
 /// Runs the command.
 pub fn run(args: FakePrinterArgs, global: &Global) -> Result<ExitCode> {
     let faults = match &args.faults {
-        Some(spec) => Faults::parse(spec)?,
+        Some(spec) => Faults::parse(spec).map_err(|e| usage(format!("--faults: {e}")))?,
         None => Faults::default(),
     };
     if !(0.0..=10.0).contains(&args.heat_tick) {

@@ -5,11 +5,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use isoforge_host::gcode;
-use isoforge_host::journal::{self, JournalRecord, Status};
+use isoforge_host::journal::{self, JournalError, JournalRecord, Status};
 use isoforge_host::protocol::{Config, Event};
 use isoforge_host::state::MachineState;
 use isoforge_host::streamer::{self, Control, Job, Progress, Update};
@@ -35,7 +35,8 @@ The journal (FILE.journal unless --journal) records the last acknowledged line d
 crash, cable pull or reset, `--resume` re-heats to the last targets, restores G90/G91 and M82/M83, \
 sets E with G92, lifts, homes X and Y, returns to the last position and continues from the first \
 line not known to be executed (or, with --from-layer N, from a layer start); it prints what it will \
-do first.\n\nTry it without a printer:\n  isoforge fake-printer &   # prints /dev/pts/N\n  isoforge \
+do first. A new print does not overwrite the journal of an unfinished job: it says how to \
+resume, and --restart starts over.\n\nTry it without a printer:\n  isoforge fake-printer &   # prints /dev/pts/N\n  isoforge \
 print part.gcode --port /dev/pts/N"
 )]
 pub struct PrintArgs {
@@ -56,6 +57,10 @@ pub struct PrintArgs {
     /// Continue an interrupted job from its journal.
     #[arg(long)]
     pub resume: bool,
+    /// Start over from the first line although the journal holds an unfinished job (its
+    /// journal is then replaced).
+    #[arg(long, conflicts_with_all = ["resume", "from_layer", "no_journal"])]
+    pub restart: bool,
     /// Resume from the start of this layer (`;LAYER:N`, else counted from the first
     /// extruding Z), restoring the state the file had there.
     #[arg(long, value_name = "N")]
@@ -111,7 +116,8 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
         } else {
             None
         };
-        let plan = journal::plan_resume(&program, fingerprint, record.as_ref(), args.from_layer)?;
+        let plan = journal::plan_resume(&program, fingerprint, record.as_ref(), args.from_layer)
+            .map_err(|e| journal_error(e, &args))?;
         if !global.quiet {
             eprint!("{}", plan.summary);
         }
@@ -119,6 +125,13 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
     } else {
         (0, Vec::new(), MachineState::default())
     };
+
+    // A fresh start must not replace what should be kept: the journal of an unfinished job
+    // (it could still be resumed) or a file that is not a journal at all.
+    if !args.no_journal && !args.resume && args.from_layer.is_none() {
+        journal::check_can_start(&journal_path, args.restart)
+            .map_err(|e| journal_error(e, &args))?;
+    }
 
     let journal = (!args.no_journal).then(|| {
         let source_line = start
@@ -276,6 +289,31 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// A journal error with the flags that deal with it.
+fn journal_error(e: JournalError, args: &PrintArgs) -> anyhow::Error {
+    let resume = format!(
+        "isoforge print {} --port {} --resume",
+        args.file.display(),
+        args.port
+    );
+    match e {
+        JournalError::Unfinished { .. } => {
+            anyhow!("{e}; continue it with `{resume}`, or start over with --restart")
+        }
+        JournalError::NotAJournal { .. } => {
+            anyhow!("{e}; give another --journal FILE, or remove it")
+        }
+        JournalError::ChangedFile { .. } | JournalError::Inconsistent { .. } => {
+            anyhow!("{e}; resume with --from-layer N, or print from the start with --restart")
+        }
+        JournalError::NoSuchLayer { layer, .. } => anyhow!("--from-layer {layer}: {e}"),
+        JournalError::NothingToResume => {
+            anyhow!("--resume needs the job's journal (or --from-layer N)")
+        }
+        other => anyhow::Error::new(other),
+    }
 }
 
 fn cancel(control: &Control, emergency: bool) {

@@ -5,15 +5,17 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-use anyhow::{Context as _, Result, bail};
+use anyhow::{Result, bail};
 use clap::{ArgGroup, Args};
 use isoforge_mesh::Mesh;
-use isoforge_slice::raster::GridSpec;
-use isoforge_slice::{Profile, Source, render_layers, sl1, slice_gcode, svx};
+use isoforge_slice::{
+    GridSpec, Origin, Profile, ProfileError, ProfileErrorKind, SliceError, Source, Technology,
+    render_layers, sl1, slice_gcode, svx,
+};
 
 use isoforge_output::{Options, OutputFile, OutputFolder};
 
-use crate::common::{Global, ModelArgs, print_json, progress_bar};
+use crate::common::{Global, ModelArgs, print_json, progress_bar, usage};
 
 /// Arguments of `isoforge slice`.
 #[derive(Args, Debug)]
@@ -83,14 +85,53 @@ fn load(args: &ModelArgs) -> Result<Loaded> {
 
 fn profile(args: &SliceArgs, resin: bool) -> Result<Profile> {
     let mut p = match &args.profile {
-        Some(path) => Profile::load(path)?,
+        Some(path) => Profile::load(path).map_err(profile_error)?,
         None if resin => Profile::default_resin(),
         None => Profile::default_fdm(),
     };
     for s in &args.set {
-        p.set(s)?;
+        p.set(s).map_err(profile_error)?;
     }
     Ok(p)
+}
+
+/// A profile error in the command line's words: an override is named as the `--set` it was,
+/// a malformed or unknown `--set` is a usage error, and a missing key says how to give it.
+fn profile_error(e: ProfileError) -> anyhow::Error {
+    let from_set = matches!(e.origin, Some(Origin::Override { .. }));
+    let text = match (&e.origin, &e.kind) {
+        (Some(Origin::Override { assignment }), kind) => format!("--set {assignment}: {kind}"),
+        (_, ProfileErrorKind::Missing { spec }) => {
+            format!("{e}, or give it with --set {}=VALUE", spec.key)
+        }
+        (_, ProfileErrorKind::WrongTechnology { wanted, .. }) => format!(
+            "{e}: give one with --profile, e.g. fixtures/printers/{}",
+            match wanted {
+                Technology::Fdm => "generic_marlin_220.toml",
+                Technology::Resin => "prusa_sl1.toml",
+            }
+        ),
+        _ => e.to_string(),
+    };
+    let usage_error = from_set
+        && matches!(
+            e.kind,
+            ProfileErrorKind::OverrideSyntax | ProfileErrorKind::UnknownKey { .. }
+        );
+    if usage_error {
+        usage(text)
+    } else {
+        anyhow::anyhow!(text)
+    }
+}
+
+/// A slicing error, with the flag named where one gives what is missing.
+fn slice_error(e: SliceError) -> anyhow::Error {
+    match e {
+        SliceError::Profile(p) => profile_error(p),
+        SliceError::EmptyRegion { .. } => anyhow::anyhow!("{e} (--bounds sets it)"),
+        other => anyhow::Error::new(other),
+    }
 }
 
 /// Where the slices go, checked and ready before the work (one destination is required).
@@ -147,8 +188,8 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
         Destination::Images(images) => images,
         Destination::Gcode(file) => {
             let out = file.path().to_path_buf();
-            let s = p.fdm()?;
-            let job = slice_gcode(&source, &s, &progress)?;
+            let s = p.fdm().map_err(profile_error)?;
+            let job = slice_gcode(&source, &s, &progress).map_err(slice_error)?;
             bar.finish_and_clear();
             file.write_with(|w| Ok::<_, anyhow::Error>(w.write_all(job.gcode.as_bytes())?))?;
             let seconds = started.elapsed().as_secs_f64();
@@ -175,10 +216,7 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
         }
     };
 
-    let r = p.resin().with_context(|| {
-        "image output (--sl1, --svx, --png-dir) needs a resin profile with pixel_size and \
-         resolution (e.g. fixtures/printers/prusa_sl1.toml)"
-    })?;
+    let r = p.resin().map_err(profile_error)?;
     let spec = if matches!(images_out, Images::Svx(_)) {
         GridSpec::Fit {
             pixel: r.layer_height,
@@ -190,7 +228,7 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
             pixel: r.pixel_size,
         }
     };
-    let images = render_layers(&source, r.layer_height, spec, &progress)?;
+    let images = render_layers(&source, r.layer_height, spec, &progress).map_err(slice_error)?;
     bar.finish_and_clear();
     let height = images.layers.last().map_or(0.0, |l| l.top);
     if height > r.max_height {

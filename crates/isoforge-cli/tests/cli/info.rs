@@ -74,8 +74,9 @@ fn command_line_bounds_win() {
     let v = info_json(&[heart.to_str().unwrap(), "--bounds", "-2,-2,-2,2,2,3"]);
     assert_eq!(bounds_of(&v), [[-2.0; 3], [2.0, 2.0, 3.0]]);
     assert_eq!(v["bounds_source"], "command line");
+    // A malformed region is a mistake in the call: a usage error.
     let out = isoforge(&["info", heart.to_str().unwrap(), "--bounds", "1,1,1,0,0,0"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("--bounds"), "{}", stderr(&out));
 }
 
@@ -123,12 +124,26 @@ fn parameters_are_listed_and_overridden() {
     assert_eq!(out.status.code(), Some(1));
     let err = stderr(&out);
     assert!(
-        err.contains("p.rhai:1:") && err.contains("\"r\" = 9"),
+        err.contains("p.rhai:1:") && err.contains("\"r\" = 9") && err.contains("--param r=9"),
         "{err}"
     );
+    // A parameter the script does not declare is a mistake in the call: usage error.
     let out = isoforge(&["info", p, "--param", "radius=3"]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(stderr(&out).contains("radius"), "{}", stderr(&out));
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("--param radius"), "{}", stderr(&out));
+    // So is a malformed --param or --bounds.
+    for bad in [
+        vec!["--param", "r"],
+        vec!["--param", "r=big"],
+        vec!["--bounds", "1,2,3"],
+        vec!["--bounds", "1,1,1,0,0,0"],
+    ] {
+        let mut args = vec!["info", p];
+        args.extend(bad.iter().copied());
+        let out = isoforge(&args);
+        assert_eq!(out.status.code(), Some(2), "{bad:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(bad[0]), "{bad:?}: {}", stderr(&out));
+    }
     let text = stdout(&isoforge(&["info", p]));
     assert!(text.contains("r = 2 (default 2, range 1 to 5)"), "{text}");
 }

@@ -234,10 +234,10 @@ fn a_missing_port_is_a_clear_error() {
 #[test]
 fn bad_fault_specs_are_usage_errors_with_the_syntax() {
     let out = isoforge(&["fake-printer", "--faults", "corrupt=7"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        stderr.contains("corrupt") && stderr.contains("seed="),
+        stderr.contains("--faults") && stderr.contains("corrupt") && stderr.contains("seed="),
         "{stderr}"
     );
 }
@@ -305,4 +305,140 @@ fn signal_cancels_cleanly(signal: &str) {
     assert_eq!(j.status, journal::Status::Cancelled);
     // The journal names a point inside the file, so --resume could carry on.
     assert!(j.executed > 0 && j.executed < done.len());
+}
+
+#[test]
+fn a_new_print_keeps_an_unfinished_journal_until_told_to_restart() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode_path = dir.path().join("vase.gcode");
+    std::fs::write(
+        &gcode_path,
+        isoforge_host::sample::vase_with_commands(2_000),
+    )
+    .unwrap();
+    let g = gcode_path.to_str().unwrap();
+    let journal_path = journal::default_path(&gcode_path);
+
+    let log1 = dir.path().join("run1.tsv");
+    let fake = FakeProcess::start("reset-at=1000", &log1);
+    let out = isoforge(&["print", g, "--port", &fake.port]);
+    assert_eq!(out.status.code(), Some(1));
+    fake.wait_exit();
+    let failed = std::fs::read(&journal_path).unwrap();
+
+    // Printing the same file again is refused before anything is sent, and the message says
+    // how to go on.
+    let log2 = dir.path().join("run2.tsv");
+    let fake = FakeProcess::start("", &log2);
+    let out = isoforge(&["print", g, "--port", &fake.port]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("unfinished")
+            && stderr.contains("--resume")
+            && stderr.contains("--restart"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read(&journal_path).unwrap(),
+        failed,
+        "journal kept"
+    );
+    // With --restart the job starts over and its journal is replaced.
+    let out = isoforge(&["print", g, "--port", &fake.port, "--restart"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    fake.wait_exit();
+    assert_eq!(logged_job(&log2), file_commands(&gcode_path));
+    let j = JournalRecord::load(&journal_path).unwrap();
+    assert_eq!(j.status, journal::Status::Completed);
+}
+
+#[test]
+fn a_journal_path_that_is_not_a_journal_is_never_overwritten() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode_path = dir.path().join("part.gcode");
+    let text = isoforge_host::sample::vase_with_commands(100);
+    std::fs::write(&gcode_path, &text).unwrap();
+    let notes = dir.path().join("notes.txt");
+    std::fs::write(&notes, "my notes\n").unwrap();
+    let g = gcode_path.to_str().unwrap();
+    // The G-code itself is refused as an input; another file that is not a journal is
+    // refused as not a journal; --restart overrides neither.
+    for (journal, why) in [
+        (g, "is the input"),
+        (notes.to_str().unwrap(), "not overwritten"),
+    ] {
+        for extra in [&[][..], &["--restart"][..]] {
+            let mut args = vec!["print", g, "--port", "/dev/isoforge-no-such-port"];
+            args.extend_from_slice(&["--journal", journal]);
+            args.extend_from_slice(extra);
+            let out = isoforge(&args);
+            assert_eq!(out.status.code(), Some(1), "{journal} {extra:?}");
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert!(stderr.contains(why), "{journal} {extra:?}: {stderr}");
+            assert_eq!(std::fs::read_to_string(&gcode_path).unwrap(), text);
+            assert_eq!(std::fs::read_to_string(&notes).unwrap(), "my notes\n");
+        }
+    }
+}
+
+#[test]
+fn an_edited_journal_is_refused_and_sends_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode_path = dir.path().join("vase.gcode");
+    std::fs::write(
+        &gcode_path,
+        isoforge_host::sample::vase_with_commands(2_000),
+    )
+    .unwrap();
+    let g = gcode_path.to_str().unwrap();
+    let journal_path = journal::default_path(&gcode_path);
+    let log1 = dir.path().join("run1.tsv");
+    let fake = FakeProcess::start("reset-at=1000", &log1);
+    let out = isoforge(&["print", g, "--port", &fake.port]);
+    assert_eq!(out.status.code(), Some(1));
+    fake.wait_exit();
+
+    let good: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&journal_path).unwrap()).unwrap();
+    let edits: [(&str, serde_json::Value, &str); 3] = [
+        ("/job/state/hotends", serde_json::json!([5000.0]), "hotends"),
+        ("/job/state/bed", serde_json::json!(1e9), "bed"),
+        ("/job/executed", serde_json::json!(999_999), "executed"),
+    ];
+    for (pointer, value, word) in edits {
+        let mut v = good.clone();
+        *v.pointer_mut(pointer).unwrap() = value;
+        std::fs::write(&journal_path, v.to_string()).unwrap();
+        let log = dir.path().join(format!("{word}.tsv"));
+        let fake = FakeProcess::start("", &log);
+        let out = isoforge(&["print", g, "--port", &fake.port, "--resume"]);
+        assert_eq!(out.status.code(), Some(1), "{pointer}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(word), "{pointer}: {stderr}");
+        drop(fake);
+        let sent = std::fs::read_to_string(&log).unwrap_or_default();
+        assert!(
+            !sent.contains("M109") && !sent.contains("G92"),
+            "{pointer}: something was sent:\n{sent}"
+        );
+    }
+    // `z` edited to NaN cannot even be written as JSON: the journal no longer parses.
+    let mut v = good.clone();
+    *v.pointer_mut("/job/state/z").unwrap() = serde_json::json!(1234.5678);
+    let text = serde_json::to_string_pretty(&v)
+        .unwrap()
+        .replace("1234.5678", "NaN");
+    std::fs::write(&journal_path, text).unwrap();
+    let out = isoforge(&[
+        "print",
+        g,
+        "--port",
+        "/dev/isoforge-no-such-port",
+        "--resume",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains(journal_path.to_str().unwrap()), "{stderr}");
 }

@@ -274,16 +274,25 @@ fn bad_input_fails_cleanly_and_writes_nothing() {
         .collect::<Vec<_>>()
         .join("\n");
     std::fs::write(&bad_profile, negative).unwrap();
-    let cases: Vec<(Vec<String>, &str)> = vec![
+    let cases: Vec<(Vec<String>, &str, i32)> = vec![
         // A negative value in a profile names the key.
         (
             vec!["--profile".into(), s(&bad_profile).into()],
             "layer_height",
+            1,
         ),
         // A negative override names the key.
-        (vec!["--set".into(), "line_width=-1".into()], "line_width"),
-        // An unknown key is refused, not ignored.
-        (vec!["--set".into(), "no_such_key=1".into()], "no_such_key"),
+        (
+            vec!["--set".into(), "line_width=-1".into()],
+            "line_width",
+            1,
+        ),
+        // An unknown key is refused, not ignored: a mistake in the call.
+        (
+            vec!["--set".into(), "no_such_key=1".into()],
+            "no_such_key",
+            2,
+        ),
         // A model larger than the bed.
         (
             vec![
@@ -293,16 +302,17 @@ fn bad_input_fails_cleanly_and_writes_nothing() {
                 "r=12".into(),
             ],
             "bed",
+            1,
         ),
     ];
-    for (extra, word) in cases {
+    for (extra, word, code) in cases {
         let mut args = vec!["slice".to_string(), s(&torus()).to_string()];
         args.extend(extra.iter().cloned());
         args.extend(["-o".to_string(), s(&out).to_string()]);
         let refs: Vec<&str> = args.iter().map(String::as_str).collect();
         let run = isoforge(&refs);
         let err = String::from_utf8_lossy(&run.stderr);
-        assert_eq!(run.status.code(), Some(1), "{extra:?}: {err}");
+        assert_eq!(run.status.code(), Some(code), "{extra:?}: {err}");
         assert!(
             err.contains(word),
             "{extra:?}: message {err:?} lacks {word:?}"
@@ -318,5 +328,122 @@ fn bad_input_fails_cleanly_and_writes_nothing() {
     } else {
         assert!(err.contains("open"), "{err}");
         assert!(!out.exists());
+    }
+}
+
+/// Runs `isoforge slice` of the torus to G-code with extra arguments; returns the exit code
+/// and stderr, and checks that no output was written.
+fn refused(extra: &[&str], dir: &Path) -> (Option<i32>, String) {
+    let out = dir.join("out.gcode");
+    let model = torus();
+    let mut args = vec!["slice", s(&model)];
+    args.extend_from_slice(extra);
+    args.extend(["-o", s(&out)]);
+    let run = isoforge(&args);
+    let err = String::from_utf8_lossy(&run.stderr).to_string();
+    assert!(!out.exists(), "{extra:?} wrote a file: {err}");
+    assert!(!err.contains("panicked"), "{extra:?}: {err}");
+    (run.status.code(), err)
+}
+
+#[test]
+fn profile_values_out_of_their_physical_range_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    // Each of these once wrote G-code: E inf, F0, a molten nozzle, a 1e308 mm retraction.
+    for (set, range) in [
+        ("filament_diameter=1e-200", "from 1 to 3.5 mm"),
+        ("print_speed=1e-300", "from 1 to 1000 mm/s"),
+        ("nozzle_temperature=1000", "from 0 to 400 °C"),
+        ("bed_temperature=300", "from 0 to 150 °C"),
+        ("retract_length=1e308", "from 0 to 20 mm"),
+        ("layer_height=1e-9", "from 0.01 to 2 mm"),
+        ("perimeters=1000000", "a whole number from 0 to 20"),
+    ] {
+        let (code, err) = refused(&["--set", set], dir.path());
+        assert_eq!(code, Some(1), "{set}: {err}");
+        let key = set.split('=').next().unwrap();
+        assert!(
+            err.contains(&format!("--set {set}")) && err.contains(&format!("`{key}`")),
+            "{set}: {err}"
+        );
+        assert!(err.contains(range), "{set}: {err} lacks {range:?}");
+    }
+}
+
+#[test]
+fn bad_profile_files_name_the_file_line_key_and_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(generic()).unwrap();
+    let line_of = |key: &str| {
+        text.lines()
+            .position(|l| l.starts_with(&format!("{key} ")))
+            .unwrap()
+            + 1
+    };
+    let with = |key: &str, line: &str| -> String {
+        text.lines()
+            .map(|l| {
+                if l.starts_with(&format!("{key} ")) {
+                    line.to_string()
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    let cases = [
+        (
+            "nozzle_temperature",
+            "nozzle_temperature = 1000",
+            "from 0 to 400 °C",
+        ),
+        ("technology", "technology = \"laser\"", "laser"),
+        (
+            "perimeters",
+            "perimeters = 1000000",
+            "a whole number from 0 to 20",
+        ),
+    ];
+    for (key, line, words) in cases {
+        let path = dir.path().join(format!("{key}.toml"));
+        std::fs::write(&path, with(key, line)).unwrap();
+        let (code, err) = refused(&["--profile", s(&path)], dir.path());
+        assert_eq!(code, Some(1), "{line}: {err}");
+        let at = format!("{}:{}", path.display(), line_of(key));
+        assert!(err.contains(&at), "{line}: {err} lacks {at}");
+        assert!(
+            err.contains(&format!("`{key}`")) && err.contains(words),
+            "{line}: {err}"
+        );
+    }
+    // An unknown placeholder in a template would reach the printer as written.
+    let path = dir.path().join("placeholder.toml");
+    std::fs::write(
+        &path,
+        text.replace("M109 S{nozzle_temperature}", "M109 S{nozzle_temp}"),
+    )
+    .unwrap();
+    let (code, err) = refused(&["--profile", s(&path)], dir.path());
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("{nozzle_temp}") && err.contains("start_gcode"),
+        "{err}"
+    );
+    // A typo of a key gets a suggestion.
+    let path = dir.path().join("typo.toml");
+    std::fs::write(&path, format!("{text}\nlayr_height = 0.2\n")).unwrap();
+    let (code, err) = refused(&["--profile", s(&path)], dir.path());
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("did you mean `layer_height`"), "{err}");
+}
+
+#[test]
+fn malformed_overrides_are_usage_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    for set in ["layer_height", "=0.2", "layr_height=0.2"] {
+        let (code, err) = refused(&["--set", set], dir.path());
+        assert_eq!(code, Some(2), "{set}: {err}");
+        assert!(err.contains(&format!("--set {set}")), "{set}: {err}");
     }
 }

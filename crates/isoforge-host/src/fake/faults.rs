@@ -46,7 +46,7 @@ Example: corrupt=0.01,drop=0.005,reset-at=5000,seed=7";
 
 /// A `--faults` string that does not parse.
 #[derive(Debug, Error)]
-#[error("--faults {spec:?}: {reason} (syntax: {FAULTS_HELP})")]
+#[error("fault spec {spec:?}: {reason} (syntax: {FAULTS_HELP})")]
 pub struct FaultsError {
     spec: String,
     reason: String,

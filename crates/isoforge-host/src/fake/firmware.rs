@@ -144,6 +144,7 @@ impl Firmware {
     }
 
     /// Everything executed so far, in order.
+    #[cfg(test)]
     pub fn executed(&self) -> &[Executed] {
         &self.executed
     }
@@ -154,11 +155,13 @@ impl Firmware {
     }
 
     /// Bytes lost because the receive ring was full.
+    #[cfg(test)]
     pub fn lost_bytes(&self) -> u64 {
         self.lost_bytes
     }
 
     /// A one-line summary of the model's state, for test failure messages.
+    #[cfg(test)]
     pub fn describe(&self) -> String {
         format!(
             "run={:?} last_n={} rx={}B line_buf={:?} queue={:?}",

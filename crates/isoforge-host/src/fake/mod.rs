@@ -1,7 +1,7 @@
 //! A fake Marlin-style printer on a pseudo-terminal, so the host can be tried and tested
 //! without hardware.
 //!
-//! [`FakePrinter::spawn`] opens a pty pair, runs the [`Firmware`] model on a thread behind the
+//! [`FakePrinter::spawn`] opens a pty pair, runs the `Firmware` model on a thread behind the
 //! master end, and gives the slave's path for a host to open like any serial port. With a
 //! baud rate, bytes cross the "wire" no faster than a real link would carry them (10 bits a
 //! byte), in both directions.
@@ -21,8 +21,11 @@ use isoforge_output::{Options, OutputError, OutputFile};
 use serialport::{SerialPort, TTYPort};
 use thiserror::Error;
 
-pub use faults::{FAULTS_HELP, Faults, FaultsError, Rng};
-pub use firmware::{COMMAND_SLOTS, Executed, Firmware, FirmwareConfig, RX_BUFFER};
+#[cfg(test)]
+pub(crate) use faults::Rng;
+pub use faults::{FAULTS_HELP, Faults, FaultsError};
+pub(crate) use firmware::Firmware;
+pub use firmware::{Executed, FirmwareConfig};
 
 /// How to run the fake printer.
 #[derive(Clone, Debug, Default)]

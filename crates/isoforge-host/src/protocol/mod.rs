@@ -1,7 +1,7 @@
 //! The RepRap/Marlin host protocol as a state machine with no I/O.
 //!
-//! Lines from the printer go in with [`Protocol::feed_line`]; lines to send and events come
-//! out of [`Protocol::poll`]; the clock is passed in, so every timeout is testable.
+//! Lines from the printer go in with `Protocol::feed_line`; lines to send and events come
+//! out of `Protocol::poll`; the clock is passed in, so every timeout is testable.
 //!
 //! How the machine keeps "each command executed exactly once, in order":
 //! - The firmware's line counter is the truth. Marlin accepts line `N` only when it is its
@@ -26,7 +26,7 @@ use std::time::{Duration, Instant};
 
 use thiserror::Error;
 
-pub use reply::{HostAction, Reply};
+pub(crate) use reply::{HostAction, Reply};
 pub use temperature::{Reading, Temperatures};
 
 use crate::gcode::{self, Command, GcodeError};
@@ -175,7 +175,7 @@ pub enum Event {
 
 /// What the driver must do next.
 #[derive(Debug)]
-pub enum Output {
+pub(crate) enum Output {
     /// Write this line (newline included) to the port.
     Send(String),
     /// Report this.
@@ -186,7 +186,7 @@ pub enum Output {
 
 /// Counters for the summary.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Stats {
+pub(crate) struct Stats {
     /// Numbered lines written (first sends and resends).
     pub lines_sent: u64,
     /// Bytes written.
@@ -232,7 +232,7 @@ enum Recovery {
 }
 
 /// The host side of the protocol for one job.
-pub struct Protocol {
+pub(crate) struct Protocol {
     cfg: Config,
     /// `lines[0]` is `M110 N0`; `lines[i]` is job command `i - 1`.
     lines: Vec<Command>,
@@ -333,13 +333,9 @@ impl Protocol {
     }
 
     /// Job commands known executed.
+    #[cfg(test)]
     pub fn executed(&self) -> usize {
         self.acked as usize
-    }
-
-    /// Job commands in this job (including a cancel sequence once cancelled).
-    pub fn job_len(&self) -> usize {
-        self.lines.len() - 1
     }
 
     /// Job commands from the job itself; after a cancel, the ones past this are the
@@ -351,16 +347,6 @@ impl Protocol {
     /// The job command at `index`.
     pub fn command(&self, index: usize) -> Option<&Command> {
         self.lines.get(index + 1)
-    }
-
-    /// True once the job finished or failed.
-    pub fn is_done(&self) -> bool {
-        self.phase == Phase::Done
-    }
-
-    /// True while paused.
-    pub fn is_paused(&self) -> bool {
-        self.paused
     }
 
     /// Stop sending new commands (those in flight still complete).

@@ -5,6 +5,7 @@
 //! file and the line (text formats) or byte offset (binary formats). [`encode`] writes a
 //! format onto any writer; [`write_mesh`] puts it in a file through `isoforge-output`.
 
+mod error;
 pub mod obj;
 pub mod ply;
 pub mod stl;
@@ -18,6 +19,8 @@ use isoforge_output::{Options, OutputFile};
 
 use crate::mesh::Mesh;
 
+pub use error::{ParseError, ParseErrorKind, Place};
+pub(crate) use error::{at_line, too_many_vertices};
 pub(crate) use weld::Welder;
 
 /// A mesh file format.
@@ -110,34 +113,23 @@ pub enum MeshIoError {
     #[error(transparent)]
     Output(#[from] isoforge_output::OutputError),
     /// The file's content is not valid.
-    #[error("{path}: {message}")]
+    #[error("{path}: {error}")]
     Parse {
         /// The file.
         path: String,
-        /// What is wrong, and where (line or byte offset).
-        message: String,
+        /// What is wrong, and where (line, byte offset or package entry).
+        error: ParseError,
     },
 }
 
-/// What a format parser reports: the message says where (line or byte offset); the
-/// dispatcher adds the file name.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ParseError(pub String);
-
-impl std::fmt::Display for ParseError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
+impl MeshIoError {
+    /// The parse error, when the content was at fault.
+    pub fn parse_error(&self) -> Option<&ParseError> {
+        match self {
+            MeshIoError::Parse { error, .. } => Some(error),
+            MeshIoError::Io { .. } | MeshIoError::Output(_) => None,
+        }
     }
-}
-
-/// Shorthand for a parse failure at a text line.
-pub(crate) fn at_line(line: usize, what: impl std::fmt::Display) -> ParseError {
-    ParseError(format!("line {line}: {what}"))
-}
-
-/// Shorthand for a parse failure at a byte offset.
-pub(crate) fn at_byte(offset: usize, what: impl std::fmt::Display) -> ParseError {
-    ParseError(format!("byte {offset}: {what}"))
 }
 
 /// Reads a mesh, choosing the format by content and extension.
@@ -155,14 +147,12 @@ pub fn read_mesh_bytes(bytes: &[u8], name: &str) -> Result<Mesh, MeshIoError> {
     let format = MeshFormat::sniff(bytes)
         .or_else(|| MeshFormat::from_extension(Path::new(name)))
         .or_else(|| obj::looks_like_obj(bytes).then_some(MeshFormat::Obj));
-    let parse_error = |e: ParseError| MeshIoError::Parse {
+    let parse_error = |error: ParseError| MeshIoError::Parse {
         path: name.to_string(),
-        message: e.0,
+        error,
     };
     let Some(format) = format else {
-        return Err(parse_error(ParseError(
-            "not a mesh file: expected STL (binary or ASCII), 3MF, OBJ or PLY".into(),
-        )));
+        return Err(parse_error(ParseError::file(ParseErrorKind::UnknownFormat)));
     };
     decode(bytes, format).map_err(parse_error)
 }
@@ -222,16 +212,19 @@ pub(crate) fn fmt_coord(v: f32) -> impl std::fmt::Display {
 
 /// Parses one coordinate token of a text format: finite f32 or an error.
 pub(crate) fn parse_coord(token: &str, line: usize) -> Result<f32, ParseError> {
-    let v: f32 = token
-        .parse()
-        .map_err(|_| at_line(line, format!("{token:?} is not a number")))?;
-    if !v.is_finite() {
-        return Err(at_line(
-            line,
-            format!("coordinate {token:?} is not a finite number"),
-        ));
-    }
-    Ok(v)
+    token
+        .parse::<f32>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| {
+            ParseError::new(
+                Place::Line(line),
+                ParseErrorKind::BadNumber {
+                    field: "coordinate".into(),
+                    token: token.to_string(),
+                },
+            )
+        })
 }
 
 /// The lines of a text file, numbered from 1, each as text (an error names a line that is
@@ -242,9 +235,11 @@ pub(crate) fn text_lines(bytes: &[u8]) -> impl Iterator<Item = Result<(usize, &s
         let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
         std::str::from_utf8(raw)
             .map(|s| (line, s))
-            .map_err(|_| at_line(line, "not text (invalid UTF-8)"))
+            .map_err(|_| ParseError::new(Place::Line(line), ParseErrorKind::NotText))
     })
 }
 
+#[cfg(test)]
+mod hostile_tests;
 #[cfg(test)]
 mod tests;

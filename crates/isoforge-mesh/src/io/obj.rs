@@ -6,7 +6,10 @@
 
 use std::io::Write;
 
-use super::{ParseError, at_line, fmt_coord, parse_coord, text_lines};
+use super::{
+    ParseError, ParseErrorKind, Place, at_line, fmt_coord, parse_coord, text_lines,
+    too_many_vertices,
+};
 use crate::mesh::Mesh;
 
 /// True when a file's opening lines look like OBJ (for files without a known extension).
@@ -40,7 +43,7 @@ pub fn read(bytes: &[u8]) -> Result<Mesh, ParseError> {
                 }
                 // An optional w (or r g b vertex colours) may follow: ignored.
                 if mesh.vertices.len() >= u32::MAX as usize {
-                    return Err(at_line(line, "more than 2^32 vertices"));
+                    return Err(too_many_vertices(Place::Line(line)));
                 }
                 mesh.vertices.push(p);
             }
@@ -71,9 +74,16 @@ pub fn read(bytes: &[u8]) -> Result<Mesh, ParseError> {
 /// Turns one face corner (`i`, `i/t`, `i//n`, `i/t/n`) into a 0-based vertex index.
 fn resolve(token: &str, defined: usize, line: usize) -> Result<u32, ParseError> {
     let first = token.split('/').next().unwrap_or("");
-    let idx: i64 = first
-        .parse()
-        .map_err(|_| at_line(line, format!("face corner {token:?} is not a vertex index")))?;
+    let bad = || {
+        ParseError::new(
+            Place::Line(line),
+            ParseErrorKind::BadIndex {
+                token: token.to_string(),
+                vertices: defined,
+            },
+        )
+    };
+    let idx: i64 = first.parse().map_err(|_| bad())?;
     let zero_based = if idx > 0 {
         idx - 1
     } else if idx < 0 {
@@ -82,10 +92,7 @@ fn resolve(token: &str, defined: usize, line: usize) -> Result<u32, ParseError> 
         return Err(at_line(line, "vertex index 0 (OBJ counts from 1)"));
     };
     if zero_based < 0 || zero_based >= defined as i64 {
-        return Err(at_line(
-            line,
-            format!("vertex index {idx} is out of range: {defined} vertices defined so far"),
-        ));
+        return Err(bad());
     }
     Ok(zero_based as u32)
 }

@@ -8,7 +8,7 @@
 
 use std::io::Write;
 
-use super::{ParseError, at_byte, at_line};
+use super::{ParseError, ParseErrorKind, Place, at_line, too_many_vertices};
 use crate::mesh::Mesh;
 
 /// A PLY scalar type.
@@ -159,19 +159,21 @@ fn int_type(name: &str, line: usize) -> Result<Scalar, ParseError> {
     }
 }
 
-/// Where the body reader is, for error messages.
-enum Place {
-    Line(usize),
-    Byte(usize),
+/// A binary body that ends before `need` more bytes of `promised`.
+fn truncated(body: &Body<'_>, at: Place, promised: String, need: usize) -> ParseError {
+    ParseError::new(
+        at,
+        ParseErrorKind::Truncated {
+            promised,
+            expected: (body.pos as u64).saturating_add(need as u64),
+            actual: body.bytes.len() as u64,
+        },
+    )
 }
 
-impl Place {
-    fn error(&self, what: impl std::fmt::Display) -> ParseError {
-        match *self {
-            Place::Line(l) => at_line(l, what),
-            Place::Byte(b) => at_byte(b, what),
-        }
-    }
+/// A structural problem at a place in the body.
+fn syntax(at: Place, what: impl std::fmt::Display) -> ParseError {
+    ParseError::new(at, ParseErrorKind::Syntax(what.to_string()))
 }
 
 /// Reads body values one at a time, whatever the encoding.
@@ -186,7 +188,7 @@ impl Body<'_> {
     fn place(&self) -> Place {
         match self.encoding {
             Encoding::Ascii => Place::Line(self.line),
-            _ => Place::Byte(self.pos),
+            _ => Place::Byte(self.pos as u64),
         }
     }
 
@@ -196,9 +198,7 @@ impl Body<'_> {
         }
         let n = ty.size();
         let Some(raw) = self.bytes.get(self.pos..self.pos + n) else {
-            return Err(self
-                .place()
-                .error("file ends inside the PLY body (truncated?)"));
+            return Err(truncated(self, self.place(), "another value".into(), n));
         };
         let mut b = [0u8; 8];
         b[..n].copy_from_slice(raw);
@@ -237,17 +237,21 @@ impl Body<'_> {
             self.pos += 1;
         }
         if start == self.pos {
-            return Err(self
-                .place()
-                .error("file ends inside the PLY body (truncated?)"));
+            return Err(syntax(
+                self.place(),
+                "file ends inside the PLY body (truncated?)",
+            ));
         }
         let tok = std::str::from_utf8(&self.bytes[start..self.pos])
-            .map_err(|_| self.place().error("not text (invalid UTF-8)"))?;
+            .map_err(|_| syntax(self.place(), "not text (invalid UTF-8)"))?;
         let v: f64 = tok
             .parse()
-            .map_err(|_| self.place().error(format!("{tok:?} is not a number")))?;
+            .map_err(|_| syntax(self.place(), format!("{tok:?} is not a number")))?;
         if !matches!(ty, Scalar::F32 | Scalar::F64) && v.fract() != 0.0 {
-            return Err(self.place().error(format!("{tok:?} is not a whole number")));
+            return Err(syntax(
+                self.place(),
+                format!("{tok:?} is not a whole number"),
+            ));
         }
         Ok(v)
     }
@@ -288,14 +292,16 @@ pub fn read(bytes: &[u8]) -> Result<Mesh, ParseError> {
                 })
                 .sum::<usize>(),
         };
-        if (el.count as u128) * (min_size as u128) > body.remaining() as u128 {
-            return Err(body.place().error(format!(
-                "the header says {} {} elements, more than the {} bytes left can hold \
-                 (truncated?)",
-                el.count,
-                el.name,
-                body.remaining()
-            )));
+        let need = (el.count as u128) * (min_size as u128);
+        if need > body.remaining() as u128 {
+            return Err(ParseError::new(
+                body.place(),
+                ParseErrorKind::Truncated {
+                    promised: format!("{} {} elements", el.count, el.name),
+                    expected: u64::try_from(need + body.pos as u128).unwrap_or(u64::MAX),
+                    actual: bytes.len() as u64,
+                },
+            ));
         }
         if el.name == "vertex" {
             let xyz = ["x", "y", "z"].map(|axis| {
@@ -304,12 +310,12 @@ pub fn read(bytes: &[u8]) -> Result<Mesh, ParseError> {
                     .position(|p| matches!(p, Property::Scalar(n, _) if n == axis))
             });
             let [Some(ix), Some(iy), Some(iz)] = xyz else {
-                return Err(ParseError(
+                return Err(ParseError::file(ParseErrorKind::Syntax(
                     "the vertex element lacks an x, y or z property".into(),
-                ));
+                )));
             };
             if el.count > u32::MAX as usize {
-                return Err(ParseError("more than 2^32 vertices".into()));
+                return Err(too_many_vertices(Place::File));
             }
             mesh.vertices.reserve(el.count);
             for i in 0..el.count {
@@ -321,9 +327,13 @@ pub fn read(bytes: &[u8]) -> Result<Mesh, ParseError> {
                     if let (Some(a), Some(v)) = (axis, v) {
                         let f = v as f32;
                         if !f.is_finite() {
-                            return Err(
-                                at.error(format!("vertex {i}: coordinate {v} is not a finite f32"))
-                            );
+                            return Err(ParseError::new(
+                                at,
+                                ParseErrorKind::BadNumber {
+                                    field: format!("vertex {i} coordinate"),
+                                    token: v.to_string(),
+                                },
+                            ));
                         }
                         p[a] = f;
                     }
@@ -338,7 +348,11 @@ pub fn read(bytes: &[u8]) -> Result<Mesh, ParseError> {
                     matches!(p, Property::List(n, _, _) if n == "vertex_indices" || n == "vertex_index")
                 })
                 .or_else(|| el.props.iter().position(|p| matches!(p, Property::List(..))))
-                .ok_or_else(|| ParseError("the face element has no index list".into()))?;
+                .ok_or_else(|| {
+                    ParseError::file(ParseErrorKind::Syntax(
+                        "the face element has no index list".into(),
+                    ))
+                })?;
             mesh.triangles.reserve(el.count.min(1 << 24));
             for f in 0..el.count {
                 for (k, prop) in el.props.iter().enumerate() {
@@ -352,23 +366,30 @@ pub fn read(bytes: &[u8]) -> Result<Mesh, ParseError> {
                     let at = body.place();
                     let n = body.value(*count_ty)?;
                     if n < 3.0 {
-                        return Err(at.error(format!("face {f} has {n} corners; needs 3")));
+                        return Err(syntax(at, format!("face {f} has {n} corners; needs 3")));
                     }
                     let n = n as usize;
                     if header.encoding != Encoding::Ascii && n * item_ty.size() > body.remaining() {
-                        return Err(at.error(format!(
-                            "face {f} says {n} corners; the file ends first (truncated?)"
-                        )));
+                        let need = n.saturating_mul(item_ty.size());
+                        return Err(truncated(
+                            &body,
+                            at,
+                            format!("face {f} with {n} corners"),
+                            need,
+                        ));
                     }
                     corners.clear();
                     for _ in 0..n {
                         let at = body.place();
                         let v = body.value(*item_ty)?;
                         if !(v >= 0.0 && v < vertex_count as f64) || v.fract() != 0.0 {
-                            return Err(at.error(format!(
-                                "face {f}: vertex index {v} is out of range \
-                                 ({vertex_count} vertices)"
-                            )));
+                            return Err(ParseError::new(
+                                at,
+                                ParseErrorKind::BadIndex {
+                                    token: v.to_string(),
+                                    vertices: vertex_count,
+                                },
+                            ));
                         }
                         corners.push(v as u32);
                     }
@@ -387,7 +408,9 @@ pub fn read(bytes: &[u8]) -> Result<Mesh, ParseError> {
         }
     }
     if !header.elements.iter().any(|e| e.name == "vertex") {
-        return Err(ParseError("the file has no vertex element".into()));
+        return Err(ParseError::file(ParseErrorKind::Syntax(
+            "the file has no vertex element".into(),
+        )));
     }
     Ok(mesh)
 }
@@ -400,13 +423,12 @@ fn read_property(body: &mut Body<'_>, prop: &Property) -> Result<Option<f64>, Pa
             let at = body.place();
             let n = body.value(*c)?;
             if n < 0.0 {
-                return Err(at.error(format!("a list count is {n}")));
+                return Err(syntax(at, format!("a list count is {n}")));
             }
             let n = n as usize;
             if body.encoding != Encoding::Ascii && n.saturating_mul(t.size()) > body.remaining() {
-                return Err(at.error(format!(
-                    "a list of {n} items runs past the end of the file (truncated?)"
-                )));
+                let need = n.saturating_mul(t.size());
+                return Err(truncated(body, at, format!("a list of {n} items"), need));
             }
             for _ in 0..n {
                 body.value(*t)?;

@@ -8,7 +8,7 @@
 
 use std::io::Write;
 
-use super::{ParseError, Welder, at_byte, at_line, fmt_coord, parse_coord};
+use super::{ParseError, ParseErrorKind, Place, Welder, at_line, fmt_coord, parse_coord};
 use crate::mesh::Mesh;
 
 const HEADER: usize = 80;
@@ -60,23 +60,24 @@ pub fn read(bytes: &[u8]) -> Result<Mesh, ParseError> {
 /// Reads a binary STL.
 pub fn read_binary(bytes: &[u8]) -> Result<Mesh, ParseError> {
     let Some(count) = binary_count(bytes) else {
-        return Err(ParseError(format!(
+        return Err(ParseError::file(ParseErrorKind::Syntax(format!(
             "{} bytes: too short for a binary STL (an 80-byte header and a 4-byte count), \
              and not an ASCII STL (which starts with \"solid\")",
             bytes.len()
-        )));
+        ))));
     };
     let count = count as usize;
     let need = (HEADER + 4) as u64 + RECORD as u64 * count as u64;
     if (bytes.len() as u64) < need {
+        // Where the first incomplete triangle starts.
         let whole = (bytes.len() - HEADER - 4) / RECORD;
-        return Err(at_byte(
-            HEADER + 4 + whole * RECORD,
-            format!(
-                "truncated binary STL: the header says {count} triangles ({need} bytes) but \
-                 the file has {} bytes; triangle {whole} is cut off here",
-                bytes.len()
-            ),
+        return Err(ParseError::new(
+            Place::Byte((HEADER + 4 + whole * RECORD) as u64),
+            ParseErrorKind::Truncated {
+                promised: format!("{count} triangles"),
+                expected: need,
+                actual: bytes.len() as u64,
+            },
         ));
     }
     let mut welder = Welder::with_capacity(count);
@@ -93,9 +94,12 @@ pub fn read_binary(bytes: &[u8]) -> Result<Mesh, ParseError> {
                 let raw = [rec[off], rec[off + 1], rec[off + 2], rec[off + 3]];
                 *v = f32::from_le_bytes(raw);
                 if !v.is_finite() {
-                    return Err(at_byte(
-                        base + off,
-                        format!("triangle {i}: a coordinate is {v} (not a finite number)"),
+                    return Err(ParseError::new(
+                        Place::Byte((base + off) as u64),
+                        ParseErrorKind::BadNumber {
+                            field: format!("triangle {i} coordinate"),
+                            token: v.to_string(),
+                        },
                     ));
                 }
             }
@@ -122,7 +126,7 @@ pub fn read_ascii(bytes: &[u8]) -> Result<Mesh, ParseError> {
                 .iter()
                 .filter(|&&b| b == b'\n')
                 .count();
-            return Err(at_line(line, "not text (invalid UTF-8) in an ASCII STL"));
+            return Err(ParseError::new(Place::Line(line), ParseErrorKind::NotText));
         }
     };
     let mut welder = Welder::with_capacity(text.len() / 200);
@@ -165,7 +169,13 @@ pub fn read_ascii(bytes: &[u8]) -> Result<Mesh, ParseError> {
                         match toks.next() {
                             Some((l, t)) => {
                                 t.parse::<f32>().map_err(|_| {
-                                    at_line(l, format!("facet normal {t:?} is not a number"))
+                                    ParseError::new(
+                                        Place::Line(l),
+                                        ParseErrorKind::BadNumber {
+                                            field: "facet normal".into(),
+                                            token: t.to_string(),
+                                        },
+                                    )
                                 })?;
                             }
                             None => return Err(at_line(line, "file ends inside a facet normal")),

@@ -34,6 +34,17 @@ fn err_of(bytes: &[u8], name: &str) -> String {
     read_mesh_bytes(bytes, name).unwrap_err().to_string()
 }
 
+/// The typed parse error of bytes that must fail to parse.
+fn parse_err_of(bytes: &[u8], name: &str) -> ParseError {
+    match read_mesh_bytes(bytes, name) {
+        Err(MeshIoError::Parse { error, path }) => {
+            assert_eq!(path, name);
+            error
+        }
+        other => panic!("{name}: expected a parse error, got {other:?}"),
+    }
+}
+
 #[test]
 fn every_format_round_trips() {
     let mut odd = merge(uv_sphere(3.25, 7, 5), &tetrahedron());
@@ -99,6 +110,19 @@ fn truncated_binary_stl_names_the_byte() {
     let e = err_of(&bytes[..84 + 50 * 5 + 17], "cut.stl");
     assert!(e.starts_with("cut.stl: byte 334: truncated"), "{e}");
     assert!(e.contains("12 triangles"), "{e}");
+    let e = parse_err_of(&bytes[..84 + 50 * 5 + 17], "cut.stl");
+    assert_eq!(e.at, Place::Byte(334));
+    assert!(
+        matches!(
+            e.kind,
+            ParseErrorKind::Truncated {
+                expected: 684,
+                actual: 351,
+                ..
+            }
+        ),
+        "{e}"
+    );
     let e = err_of(&bytes[..40], "short.stl");
     assert!(e.contains("too short"), "{e}");
 }
@@ -113,8 +137,22 @@ fn nan_coordinates_are_rejected_with_a_place() {
         e.contains(&format!("byte {off}")) && e.contains("triangle 2"),
         "{e}"
     );
+    let e = parse_err_of(&bytes, "nan.stl");
+    assert_eq!(e.at, Place::Byte(off as u64));
+    assert!(matches!(e.kind, ParseErrorKind::BadNumber { .. }), "{e}");
     let e = err_of(b"v 0 0 0\nv nan 1 2\nv 0 1 0\nf 1 2 3\n", "n.obj");
     assert!(e.starts_with("n.obj: line 2:"), "{e}");
+    let e = parse_err_of(b"v 0 0 0\nv nan 1 2\nv 0 1 0\nf 1 2 3\n", "n.obj");
+    assert_eq!(
+        (e.at, e.kind),
+        (
+            Place::Line(2),
+            ParseErrorKind::BadNumber {
+                field: "coordinate".into(),
+                token: "nan".into()
+            }
+        )
+    );
     let e = err_of(
         b"solid x\nfacet normal 0 0 0\nouter loop\nvertex 0 inf 0\n",
         "i.stl",
@@ -152,10 +190,16 @@ fn obj_faces_in_every_form() {
 
 #[test]
 fn obj_bad_indices_name_the_line() {
-    let e = err_of(b"v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 4\n", "b.obj");
-    assert!(
-        e.starts_with("b.obj: line 5:") && e.contains("out of range"),
-        "{e}"
+    let e = parse_err_of(b"v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 4\n", "b.obj");
+    assert_eq!(
+        (e.at, e.kind),
+        (
+            Place::Line(5),
+            ParseErrorKind::BadIndex {
+                token: "4".into(),
+                vertices: 3
+            }
+        )
     );
     let e = err_of(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "z.obj");
     assert!(e.contains("line 4") && e.contains("index 0"), "{e}");
@@ -245,11 +289,18 @@ fn ply_errors_say_where() {
     let good = odd_ply(&cube(1.0), "binary_little_endian");
     let e = err_of(&good[..good.len() - 30], "t.ply");
     assert!(e.contains("byte") && e.contains("truncated"), "{e}");
+    let e = parse_err_of(&good[..good.len() - 30], "t.ply");
+    assert!(matches!(e.at, Place::Byte(_)), "{e}");
+    assert!(matches!(e.kind, ParseErrorKind::Truncated { .. }), "{e}");
     let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
                 property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
                 0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n";
-    let e = err_of(text.as_bytes(), "r.ply");
-    assert!(e.contains("line 13") && e.contains("out of range"), "{e}");
+    let e = parse_err_of(text.as_bytes(), "r.ply");
+    assert_eq!(e.at, Place::Line(13), "{e}");
+    assert!(
+        matches!(e.kind, ParseErrorKind::BadIndex { vertices: 3, .. }),
+        "{e}"
+    );
     let e = err_of(
         b"ply\nformat ascii 1.0\nelement vertex 1\nproperty fluffy x\n",
         "h.ply",
@@ -288,6 +339,10 @@ fn threemf_of_several_objects_merges_them() {
 #[test]
 fn threemf_errors() {
     assert!(err_of(b"PK\x03\x04 nonsense", "z.3mf").contains("zip"));
+    assert!(matches!(
+        parse_err_of(b"PK\x03\x04 nonsense", "z.3mf").kind,
+        ParseErrorKind::Zip(_)
+    ));
     let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
     zip.start_file("readme.txt", zip::write::SimpleFileOptions::default())
         .unwrap();
@@ -299,6 +354,10 @@ fn threemf_errors() {
 fn unknown_content_is_a_clear_error() {
     let e = err_of(b"\x00\x01hello", "what.bin");
     assert!(e.contains("not a mesh file"), "{e}");
+    assert_eq!(
+        parse_err_of(b"\x00\x01hello", "what.bin").kind,
+        ParseErrorKind::UnknownFormat
+    );
 }
 
 #[test]

@@ -68,8 +68,7 @@ impl Welder {
         if let Some(&i) = self.map.get(&key) {
             return Ok(i);
         }
-        let i = u32::try_from(next)
-            .map_err(|_| ParseError("more than 2^32 vertices: too large to index".into()))?;
+        let i = u32::try_from(next).map_err(|_| super::too_many_vertices(super::Place::File))?;
         self.map.insert(key, i);
         self.mesh.vertices.push(p);
         Ok(i)

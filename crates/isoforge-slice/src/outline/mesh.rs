@@ -9,9 +9,9 @@ use std::collections::HashMap;
 
 use isoforge_mesh::Mesh;
 
-use crate::SliceError;
 use crate::geom::{Contour, simplify_closed};
 use crate::outline::march::chain;
+use crate::{MeshProblem, SliceError};
 
 /// Slices a closed, outward-oriented mesh.
 pub struct MeshSlicer<'a> {
@@ -36,24 +36,29 @@ fn at(mesh: &Mesh, v: u32) -> [f64; 3] {
 /// consistently oriented), and positive volume (normals pointing out).
 pub fn check_sliceable(mesh: &Mesh) -> Result<(), SliceError> {
     if mesh.triangles.is_empty() {
-        return Err(SliceError::Mesh("the mesh has no triangles".into()));
+        return Err(MeshProblem::NoTriangles.into());
     }
     let nv = mesh.vertices.len() as u32;
-    if let Some(v) = mesh
+    if let Some((index, v)) = mesh
         .vertices
         .iter()
-        .find(|v| v.iter().any(|c| !c.is_finite()))
+        .enumerate()
+        .find(|(_, v)| v.iter().any(|c| !c.is_finite()))
     {
-        return Err(SliceError::Mesh(format!(
-            "a vertex has a coordinate that is not a number: {v:?}"
-        )));
+        return Err(MeshProblem::NotFinite {
+            index,
+            position: *v,
+        }
+        .into());
     }
     let mut directed: HashMap<(u32, u32), u32> = HashMap::with_capacity(mesh.triangles.len() * 3);
     for (t, tri) in mesh.triangles.iter().enumerate() {
         if tri.iter().any(|&v| v >= nv) {
-            return Err(SliceError::Mesh(format!(
-                "triangle {t} refers to a vertex beyond the {nv} vertices"
-            )));
+            return Err(MeshProblem::BadIndex {
+                triangle: t,
+                vertices: nv as usize,
+            }
+            .into());
         }
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
@@ -61,13 +66,7 @@ pub fn check_sliceable(mesh: &Mesh) -> Result<(), SliceError> {
                 continue;
             }
             if directed.insert((a, b), t as u32).is_some() {
-                let p = at(mesh, a);
-                return Err(SliceError::Mesh(format!(
-                    "the edge at ({:.3}, {:.3}, {:.3}) is used twice in the same direction: \
-                     triangles are wound inconsistently or the mesh is not manifold; repair it \
-                     (e.g. `isoforge check` shows where) before slicing",
-                    p[0], p[1], p[2]
-                )));
+                return Err(MeshProblem::NotManifold { at: at(mesh, a) }.into());
             }
         }
     }
@@ -76,25 +75,18 @@ pub fn check_sliceable(mesh: &Mesh) -> Result<(), SliceError> {
         .filter(|&&(a, b)| !directed.contains_key(&(b, a)))
         .collect();
     if let Some(&&(a, _)) = open.first() {
-        let p = at(mesh, a);
-        return Err(SliceError::Mesh(format!(
-            "the mesh is open: {} edges have only one triangle (one near ({:.3}, {:.3}, {:.3})); \
-             close the holes before slicing",
-            open.len(),
-            p[0],
-            p[1],
-            p[2]
-        )));
+        return Err(MeshProblem::Open {
+            edges: open.len(),
+            near: at(mesh, a),
+        }
+        .into());
     }
     let volume = mesh.signed_volume();
     if volume < 0.0 {
-        return Err(SliceError::Mesh(format!(
-            "the mesh is inside out (its volume is {volume:.3} mm³: triangles wind clockwise \
-             seen from outside); flip its normals before slicing"
-        )));
+        return Err(MeshProblem::InsideOut { volume }.into());
     }
     if volume == 0.0 {
-        return Err(SliceError::Mesh("the mesh encloses no volume".into()));
+        return Err(MeshProblem::NoVolume.into());
     }
     Ok(())
 }
@@ -225,8 +217,11 @@ mod tests {
     fn open_mesh_is_refused() {
         let mut m = octahedron();
         m.triangles.pop();
-        let msg = MeshSlicer::new(&m, 0.0).err().unwrap().to_string();
-        assert!(msg.contains("open"), "{msg}");
+        let e = MeshSlicer::new(&m, 0.0).err().unwrap();
+        assert!(
+            matches!(e, SliceError::Mesh(MeshProblem::Open { edges: 3, .. })),
+            "{e}"
+        );
     }
 
     #[test]
@@ -235,7 +230,10 @@ mod tests {
         for t in &mut m.triangles {
             t.swap(1, 2);
         }
-        let msg = MeshSlicer::new(&m, 0.0).err().unwrap().to_string();
-        assert!(msg.contains("inside out"), "{msg}");
+        let e = MeshSlicer::new(&m, 0.0).err().unwrap();
+        assert!(
+            matches!(e, SliceError::Mesh(MeshProblem::InsideOut { volume }) if volume < 0.0),
+            "{e}"
+        );
     }
 }

@@ -7,3 +7,6 @@ pub mod mesh;
 
 pub use field::FieldSlicer;
 pub use mesh::MeshSlicer;
+
+#[cfg(test)]
+mod tests;

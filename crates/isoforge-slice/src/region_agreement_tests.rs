@@ -1,3 +1,5 @@
+//! (Unit tests: outlines are internal to the slicer.)
+//!
 //! The mesher, the slicer and the renderer agree on what is inside a model's region: all
 //! three evaluate `isoforge_field::ClippedField`, and this checks that they do.
 //!
@@ -7,10 +9,10 @@
 //! region's distance hide a NaN (float `max` does) would see the half x < 0 as inside; one
 //! that ignored the region would see the whole half disc. Each is off by 20 % or more.
 
+use crate::{Source, geom::Contour};
 use isoforge_field::{Bounds, Shape};
 use isoforge_mesh::{MeshSettings, check, mesh_shape};
 use isoforge_render::{RenderSettings, View, render};
-use isoforge_slice::{Contour, Source};
 
 fn model() -> (Shape, Bounds) {
     let (x, y) = (Shape::x(), Shape::y());

@@ -1,11 +1,15 @@
-//! Field outlines against exact sections, and field against mesh outlines.
+//! Field outlines against exact sections, and field against mesh outlines. (Unit tests:
+//! outlines are an internal stage; the shapes with known sections are shared with the
+//! integration tests.)
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 
 use common::{Known, cube, sphere, torus};
 use isoforge_mesh::{MeshSettings, mesh_shape};
-use isoforge_slice::geom::{contours_area, distance_to_contours, signed_area};
-use isoforge_slice::outline::{FieldSlicer, MeshSlicer};
+
+use super::{FieldSlicer, MeshSlicer};
+use crate::geom::{contours_area, distance_to_contours, signed_area};
 
 fn field(k: &Known) -> FieldSlicer {
     FieldSlicer::new(&k.shape, k.bounds, 0.05, 0.005)

@@ -1,11 +1,11 @@
-//! Script errors as `path:line:column: what`, with the call chain for errors raised inside
-//! script functions.
+//! Turning rhai's errors into [`ScriptError`]s located at `path:line:column` of the text the
+//! user wrote, with the call chain for errors raised inside script functions.
 
 use std::path::Path;
 
 use rhai::{EvalAltResult, ParseError, Position};
 
-use crate::ScriptError;
+use crate::error::{CallSite, Location, RuntimeCause, ScriptError};
 use crate::notation::Rewritten;
 
 /// Where errors point: the file, and the map from the compiled text's columns back to
@@ -18,22 +18,23 @@ pub struct Locator<'a> {
     pub map: &'a Rewritten,
 }
 
-fn location(at: Locator, pos: Position) -> String {
-    let path = at.path;
-    match (pos.line(), pos.position()) {
-        (Some(l), Some(c)) => format!("{}:{l}:{}", path.display(), at.map.original_column(l, c)),
-        (Some(l), None) => format!("{}:{l}", path.display()),
-        _ => path.display().to_string(),
+fn location(at: Locator, pos: Position) -> Location {
+    let line = pos.line();
+    Location {
+        path: at.path.to_path_buf(),
+        line,
+        column: line
+            .zip(pos.position())
+            .map(|(l, c)| at.map.original_column(l, c)),
     }
 }
 
 /// A syntax error.
 pub fn parse_error(at: Locator, err: &ParseError) -> ScriptError {
-    ScriptError(format!(
-        "{}: syntax error: {}",
-        location(at, err.position()),
-        err.err_type()
-    ))
+    ScriptError::Syntax {
+        at: location(at, err.position()),
+        message: err.err_type().to_string(),
+    }
 }
 
 /// A runtime error, located at the innermost position (inside the function that failed),
@@ -42,27 +43,23 @@ pub fn eval_error(at: Locator, err: &EvalAltResult) -> ScriptError {
     let mut calls = Vec::new();
     let mut inner = err;
     while let EvalAltResult::ErrorInFunctionCall(name, _, next, pos) = inner {
-        let who = if name.starts_with("anon$") {
-            "a closure".to_string()
-        } else {
-            format!("function `{name}`")
-        };
-        calls.push(format!("in {who} called at {}", location(at, *pos)));
+        calls.push(CallSite {
+            function: (!name.starts_with("anon$")).then(|| name.to_string()),
+            at: location(at, *pos),
+        });
         inner = next;
     }
+    calls.reverse();
     let pos = inner.position();
-    let mut what = describe(inner);
-    if let EvalAltResult::ErrorStackOverflow(_) = inner
-        && let Some(name) = word_at(&at.map.source, pos)
-    {
-        what = format!("{what}, starting with the call to `{name}`");
+    let mut cause = describe(inner);
+    if let RuntimeCause::TooDeep { function, .. } = &mut cause {
+        *function = word_at(&at.map.source, pos);
     }
-    let mut msg = format!("{}: {what}", location(at, pos));
-    for c in calls.iter().rev() {
-        msg.push_str("\n  ");
-        msg.push_str(c);
+    ScriptError::Runtime {
+        at: location(at, pos),
+        cause: Box::new(cause),
+        calls,
     }
-    ScriptError(msg)
 }
 
 /// The identifier at a 1-based line and column of `source`, if one starts there.
@@ -76,43 +73,47 @@ fn word_at(source: &str, pos: Position) -> Option<String> {
     (!word.is_empty()).then_some(word)
 }
 
-/// Rhai's message, with advice for the limits a model script runs into.
-fn describe(err: &EvalAltResult) -> String {
+/// What stopped the script, with advice for the limits a model script runs into.
+fn describe(err: &EvalAltResult) -> RuntimeCause {
     match err {
-        EvalAltResult::ErrorTooManyOperations(_) => format!(
-            "the script ran more than {} operations (an endless loop?)",
-            crate::engine::MAX_OPERATIONS
-        ),
-        EvalAltResult::ErrorStackOverflow(_) => format!(
-            "function calls nested more than {} deep (endless recursion?)",
-            crate::engine::MAX_CALL_LEVELS
-        ),
+        EvalAltResult::ErrorTooManyOperations(_) => RuntimeCause::TooManyOperations {
+            limit: crate::engine::MAX_OPERATIONS,
+        },
+        EvalAltResult::ErrorStackOverflow(_) => RuntimeCause::TooDeep {
+            limit: crate::engine::MAX_CALL_LEVELS,
+            function: None,
+        },
         EvalAltResult::ErrorFunctionNotFound(sig, _) => {
             // The notation pass turned `^` into `**`; name the operator the user wrote.
-            let sig = match sig.strip_prefix("** (") {
+            let signature = match sig.strip_prefix("** (") {
                 Some(rest) => format!("^ ({rest}"),
                 None => sig.clone(),
             };
-            let name = sig.split(" (").next().unwrap_or(&sig);
-            match suggestion(name) {
-                Some(known) => format!("no function {sig}: did you mean {known}?"),
-                None => format!(
-                    "no function {sig}: unknown name, or wrong number or types of arguments"
-                ),
+            let name = signature.split(" (").next().unwrap_or(&signature);
+            RuntimeCause::UnknownFunction {
+                suggestion: suggestion(name),
+                signature,
             }
         }
-        EvalAltResult::ErrorRuntime(msg, _) => match msg.clone().into_immutable_string() {
-            Ok(s) => s.to_string(),
-            Err(_) => format!("{msg}"),
-        },
-        EvalAltResult::ErrorMismatchDataType(want, got, _) => {
-            format!("wrong type: expected {want}, got {got}")
+        EvalAltResult::ErrorRuntime(value, _) => {
+            // The library raises typed causes (see `args::fail_with`); `throw` raises text.
+            if let Some(cause) = value.clone().try_cast::<RuntimeCause>() {
+                return cause;
+            }
+            match value.clone().into_immutable_string() {
+                Ok(s) => RuntimeCause::Failed(s.to_string()),
+                Err(_) => RuntimeCause::Failed(format!("{value}")),
+            }
         }
+        EvalAltResult::ErrorMismatchDataType(want, got, _) => RuntimeCause::WrongType {
+            expected: want.clone(),
+            found: got.clone(),
+        },
         other => {
             // rhai's own message ends with " (line L, position C)": we lead with that.
             let text = other.to_string();
             let suffix = format!(" ({})", other.position());
-            text.strip_suffix(&suffix).unwrap_or(&text).to_string()
+            RuntimeCause::Failed(text.strip_suffix(&suffix).unwrap_or(&text).to_string())
         }
     }
 }
