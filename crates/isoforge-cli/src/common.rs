@@ -166,9 +166,19 @@ pub fn progress_bar(global: &Global, len: u64, message: &str) -> indicatif::Prog
     bar
 }
 
+/// Set once a command has printed its JSON object, so `main` does not print a second one
+/// for an error that follows it (the command's object then carries the `"error"` itself).
+static JSON_PRINTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
 /// Prints a JSON object on stdout.
 pub fn print_json(value: &serde_json::Value) {
+    JSON_PRINTED.store(true, std::sync::atomic::Ordering::Relaxed);
     // `println!` panics when stdout is a closed pipe (`| head`); a reader that went away
     // is not an error of ours.
     let _ = writeln!(std::io::stdout().lock(), "{value}");
+}
+
+/// Whether a JSON object went to stdout already.
+pub fn json_printed() -> bool {
+    JSON_PRINTED.load(std::sync::atomic::Ordering::Relaxed)
 }

@@ -41,13 +41,18 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return usage_error(e),
+    };
     let global = cli.global;
     if let Err(e) = signals::install()
         && !global.quiet
     {
         eprintln!("warning: signals will end isoforge without cleaning up: {e}");
     }
+    // A script's print() is chatter: `--quiet` silences it (it goes to stderr, never stdout).
+    isoforge_script::echo_prints(!global.quiet);
     let result = match cli.command {
         Command::Mesh(args) => cmd::mesh::run(args, &global),
         Command::Render(args) => cmd::render::run(args, &global),
@@ -60,16 +65,54 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(err) => {
-            eprintln!("error: {err:#}");
-            exit_code(&err)
+            let message = error_message(&err);
+            let code = exit_code(&err);
+            if global.json && !common::json_printed() {
+                common::print_json(&serde_json::json!({ "error": message, "exit_code": code }));
+            }
+            eprintln!("error: {message}");
+            ExitCode::from(code)
         }
     }
 }
 
+/// A command line clap could not parse: clap's own message and exit status (2; 0 for
+/// `--help` and `--version`), and with `--json` anywhere in it, the one JSON object too.
+fn usage_error(e: clap::Error) -> ExitCode {
+    let code = e.exit_code();
+    let wants_json = std::env::args_os().any(|a| a == "--json");
+    if wants_json && code != 0 {
+        let text = e.render().to_string();
+        let first = text.lines().next().unwrap_or("usage error");
+        let message = first.strip_prefix("error: ").unwrap_or(first);
+        common::print_json(&serde_json::json!({ "error": message, "exit_code": code }));
+    }
+    let _ = e.print();
+    ExitCode::from(u8::try_from(code).unwrap_or(2))
+}
+
+/// The error and its causes, joined with ": ", leaving out a cause whose text the message
+/// already holds (an error that prints its source and also returns it as `source()` would
+/// otherwise say the same thing twice).
+fn error_message(err: &anyhow::Error) -> String {
+    let mut message = String::new();
+    for cause in err.chain() {
+        let text = cause.to_string();
+        if message.contains(&text) {
+            continue;
+        }
+        if !message.is_empty() {
+            message.push_str(": ");
+        }
+        message.push_str(&text);
+    }
+    message
+}
+
 /// 2 for a usage error anywhere in the chain (see [`common::UsageError`]), else 1.
-fn exit_code(err: &anyhow::Error) -> ExitCode {
+fn exit_code(err: &anyhow::Error) -> u8 {
     let usage = err
         .chain()
         .any(|cause| cause.downcast_ref::<common::UsageError>().is_some());
-    ExitCode::from(if usage { 2 } else { 1 })
+    if usage { 2 } else { 1 }
 }

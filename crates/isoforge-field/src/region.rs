@@ -32,7 +32,10 @@ pub enum RegionError {
         half_side: f64,
     },
     /// What may be inside reaches the search box's faces: the model needs a region given.
-    #[error("the model is not bounded: it reaches ±{half_side} mm from the origin")]
+    #[error(
+        "the model has no region: it is not bounded, or larger than the box searched \
+         (what may be inside reaches ±{half_side} mm from the origin)"
+    )]
     Unbounded {
         /// Half the side of the box searched, mm ([`SEARCH_HALF_SIDE`]).
         half_side: f64,

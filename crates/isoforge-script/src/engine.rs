@@ -1,6 +1,8 @@
 //! The sandboxed Rhai engine a model script runs in.
 
 use isoforge_field::Shape;
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rhai::module_resolvers::DummyModuleResolver;
 use rhai::{Dynamic, Engine};
 
@@ -25,6 +27,15 @@ const MAX_ARRAY: usize = 1 << 20;
 const MAX_MAP: usize = 1 << 16;
 
 /// Builds an engine with the library, limits and no way out of the sandbox.
+/// Whether a script's `print()` and `debug()` reach stderr (see [`echo_prints`]).
+static ECHO_PRINTS: AtomicBool = AtomicBool::new(true);
+
+/// Lets a script's `print()` and `debug()` through to stderr, or silences them (`--quiet`).
+/// Process-wide, like stderr itself: scripts never write to stdout.
+pub fn echo_prints(on: bool) {
+    ECHO_PRINTS.store(on, Ordering::Relaxed);
+}
+
 pub fn build(shared: &Shared) -> Engine {
     let mut engine = Engine::new();
     // Without this rhai runs its own `/` and `^` on numbers and ignores ours (9/4 == 2).
@@ -40,8 +51,16 @@ pub fn build(shared: &Shared) -> Engine {
     engine.disable_symbol("import");
     engine.disable_symbol("eval");
     // stdout belongs to `--json`: script output goes to stderr.
-    engine.on_print(|s| eprintln!("{s}"));
-    engine.on_debug(|s, _, pos| eprintln!("{pos:?}: {s}"));
+    engine.on_print(|s| {
+        if ECHO_PRINTS.load(Ordering::Relaxed) {
+            eprintln!("{s}");
+        }
+    });
+    engine.on_debug(|s, _, pos| {
+        if ECHO_PRINTS.load(Ordering::Relaxed) {
+            eprintln!("{pos:?}: {s}");
+        }
+    });
     engine.register_type_with_name::<Shape>("Shape");
     engine.register_fn("to_string", |s: &mut Shape| format!("{s:?}"));
     engine.register_fn("to_debug", |s: &mut Shape| format!("{s:?}"));

@@ -38,7 +38,7 @@ mod ops;
 mod params;
 mod rhai_errors;
 
-pub use engine::{MAX_CALL_LEVELS, MAX_OPERATIONS};
+pub use engine::{MAX_CALL_LEVELS, MAX_OPERATIONS, echo_prints};
 pub use error::{CallSite, Location, RuntimeCause, ScriptError};
 
 /// A declared parameter.

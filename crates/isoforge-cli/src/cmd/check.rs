@@ -26,9 +26,9 @@ pub struct CheckArgs {
 pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
     let mesh = match read_mesh(&args.mesh) {
         Ok(m) => m,
+        // The contract: 2 when the file cannot be read (1 is kept for "read, and broken").
         Err(e) => {
-            eprintln!("error: {e}");
-            return Ok(ExitCode::from(2));
+            return Err(crate::common::usage(e.to_string()));
         }
     };
     let report = check(&mesh);

@@ -39,10 +39,9 @@ pub struct MeshArgs {
     threads: Option<usize>,
 }
 
-/// A usage error: message, exit status 2.
+/// A usage error: message, exit status 2 (reported by `main`, with `--json` too).
 fn usage(message: String) -> Result<ExitCode> {
-    eprintln!("error: {message}");
-    Ok(ExitCode::from(2))
+    Err(crate::common::usage(message))
 }
 
 /// The depth for a cell size: the first level whose cells are no larger.

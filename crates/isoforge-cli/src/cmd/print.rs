@@ -248,18 +248,6 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
     };
     bar.finish_and_clear();
 
-    if global.json {
-        print_json(&serde_json::json!({
-            "lines_sent": report.lines_sent,
-            "resends": report.resends,
-            "seconds": report.seconds,
-            "completed": report.completed,
-            "cancelled": report.cancelled,
-            "executed": report.executed,
-            "commands": program.commands.len(),
-            "error": report.error.as_ref().map(|e| e.to_string()),
-        }));
-    }
     let resume_hint = if args.no_journal {
         String::new()
     } else {
@@ -269,15 +257,34 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
             args.port
         )
     };
-    if let Some(err) = report.error {
-        bail!("{err}{resume_hint}");
-    }
-    if report.cancelled {
-        bail!(
+    let failure = match (&report.error, report.cancelled) {
+        (Some(err), _) => Some(format!("{err}{resume_hint}")),
+        (None, true) => Some(format!(
             "cancelled after {} of {} commands{resume_hint}",
             report.executed,
             program.commands.len()
-        );
+        )),
+        (None, false) => None,
+    };
+    if global.json {
+        // One object, failure or not: the figures, and "error" when the job did not finish.
+        let mut value = serde_json::json!({
+            "lines_sent": report.lines_sent,
+            "resends": report.resends,
+            "seconds": report.seconds,
+            "completed": report.completed,
+            "cancelled": report.cancelled,
+            "executed": report.executed,
+            "commands": program.commands.len(),
+        });
+        if let Some(f) = &failure {
+            value["error"] = f.clone().into();
+            value["exit_code"] = 1.into();
+        }
+        print_json(&value);
+    }
+    if let Some(f) = failure {
+        bail!("{f}");
     }
     if !quiet {
         eprintln!(

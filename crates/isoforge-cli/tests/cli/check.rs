@@ -87,9 +87,12 @@ fn unreadable_files_exit_2_naming_the_file() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("junk.obj: line 3"), "{err}");
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     assert!(
-        out.stdout.is_empty(),
-        "--json prints nothing on stdout for an unreadable file"
+        json["error"]
+            .as_str()
+            .is_some_and(|e| e.contains("junk.obj: line 3")),
+        "--json prints the error as one object: {json}"
     );
 }
 
