@@ -118,6 +118,14 @@ pub enum ScriptError {
         /// Why.
         source: std::io::Error,
     },
+    /// The file is larger than any model (or endless, like `/dev/zero`).
+    #[error("{}: larger than {limit} bytes, too large for a model file", path.display())]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The largest size read, bytes.
+        limit: u64,
+    },
     /// The file is not UTF-8 text.
     #[error("{}: not a text file (invalid UTF-8 at byte {byte})", path.display())]
     NotText {

@@ -67,10 +67,7 @@ pub struct Model {
 
 /// Loads a model file (`.rhai` script, or a `.vm` expression file) with parameter overrides.
 pub fn load_file(path: &Path, params: &[(String, f64)]) -> Result<Model, ScriptError> {
-    let bytes = std::fs::read(path).map_err(|source| ScriptError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = read_capped(path)?;
     let text = String::from_utf8(bytes).map_err(|e| ScriptError::NotText {
         path: path.to_path_buf(),
         byte: e.utf8_error().valid_up_to(),
@@ -83,6 +80,32 @@ pub fn load_file(path: &Path, params: &[(String, f64)]) -> Result<Model, ScriptE
     } else {
         load_script(path, &text, params)
     }
+}
+
+/// The largest model file read, in bytes. Scripts are a few kB and the largest `.vm` model
+/// known (prospero, a page of text) about 0.5 MB; the cap only stops `/dev/zero` or a
+/// mistaken multi-gigabyte file from filling memory before the parser can say no.
+pub const MAX_MODEL_BYTES: u64 = 64 << 20;
+
+/// Reads at most [`MAX_MODEL_BYTES`] (plus one, to tell a file that is too large).
+fn read_capped(path: &Path) -> Result<Vec<u8>, ScriptError> {
+    use std::io::Read as _;
+    let read_error = |source| ScriptError::Read {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = std::fs::File::open(path).map_err(read_error)?;
+    let mut bytes = Vec::new();
+    file.take(MAX_MODEL_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(read_error)?;
+    if bytes.len() as u64 > MAX_MODEL_BYTES {
+        return Err(ScriptError::TooLarge {
+            path: path.to_path_buf(),
+            limit: MAX_MODEL_BYTES,
+        });
+    }
+    Ok(bytes)
 }
 
 /// Loads a `.vm` expression file (one operation per line; see `isoforge_field::vm`).

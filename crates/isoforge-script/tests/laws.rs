@@ -70,4 +70,44 @@ proptest! {
     fn any_text_loads_or_fails(src in "\\PC{0,64}") {
         let _ = load_script(Path::new("t.rhai"), &src, &[]);
     }
+
+    /// Every classic fixture, cut anywhere or with one byte changed: a model or a located
+    /// error, never a panic (mutations keep most of a real script, so they reach further
+    /// than random text).
+    #[test]
+    fn mutated_fixtures_load_or_fail(which in 0usize..64, at in any::<usize>(), byte in any::<u8>(), cut in any::<bool>()) {
+        let files = classic_fixtures();
+        let (name, text) = &files[which % files.len()];
+        let mut bytes = text.clone().into_bytes();
+        let at = at % bytes.len().max(1);
+        if cut {
+            bytes.truncate(at);
+        } else if let Some(b) = bytes.get_mut(at) {
+            *b = byte;
+        }
+        let Ok(src) = String::from_utf8(bytes) else { return Ok(()); };
+        if let Err(e) = load_script(Path::new(name), &src, &[]) {
+            prop_assert!(e.to_string().starts_with(name.as_str()), "{}", e);
+        }
+    }
+}
+
+/// The classic fixtures' names and texts.
+fn classic_fixtures() -> Vec<(String, String)> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/classic");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .expect("fixtures/classic")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "rhai"))
+        .map(|p| {
+            let name = p
+                .file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned();
+            (name, std::fs::read_to_string(&p).expect("text"))
+        })
+        .collect();
+    files.sort();
+    files
 }

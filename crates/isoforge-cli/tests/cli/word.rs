@@ -129,3 +129,15 @@ fn quiet_silences_a_scripts_print() {
     assert!(json.status.success());
     json_of(&json);
 }
+
+#[test]
+fn an_endless_model_file_is_refused_with_bounded_memory() {
+    // /dev/zero as a model: read up to the cap, then refused (not read until memory ends).
+    let out = isoforge(&["info", "/dev/zero"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("/dev/zero") && stderr.contains("too large"),
+        "{stderr}"
+    );
+}
