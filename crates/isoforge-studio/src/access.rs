@@ -117,7 +117,11 @@ impl Access {
 /// Compares without stopping at the first differing byte, so response times do not tell an
 /// attacker how much of a guess was right.
 fn same_secret(a: &str, b: &str) -> bool {
-    a.len() == b.len() && a.bytes().zip(b.bytes()).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+    a.len() == b.len()
+        && a.bytes()
+            .zip(b.bytes())
+            .fold(0u8, |acc, (x, y)| acc | (x ^ y))
+            == 0
 }
 
 fn cookie_value(headers: &HeaderMap, name: &str) -> Option<String> {

@@ -6,15 +6,51 @@ use axum::response::{IntoResponse, Response};
 
 /// Name, content type and content of every file the page loads.
 const ASSETS: &[(&str, &str, &str)] = &[
-    ("index.html", "text/html; charset=utf-8", include_str!("../assets/index.html")),
-    ("studio.css", "text/css; charset=utf-8", include_str!("../assets/studio.css")),
-    ("studio.js", "text/javascript; charset=utf-8", include_str!("../assets/studio.js")),
-    ("api.js", "text/javascript; charset=utf-8", include_str!("../assets/api.js")),
-    ("editor.js", "text/javascript; charset=utf-8", include_str!("../assets/editor.js")),
-    ("view3d.js", "text/javascript; charset=utf-8", include_str!("../assets/view3d.js")),
-    ("params.js", "text/javascript; charset=utf-8", include_str!("../assets/params.js")),
-    ("layers.js", "text/javascript; charset=utf-8", include_str!("../assets/layers.js")),
-    ("print.js", "text/javascript; charset=utf-8", include_str!("../assets/print.js")),
+    (
+        "index.html",
+        "text/html; charset=utf-8",
+        include_str!("../assets/index.html"),
+    ),
+    (
+        "studio.css",
+        "text/css; charset=utf-8",
+        include_str!("../assets/studio.css"),
+    ),
+    (
+        "studio.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../assets/studio.js"),
+    ),
+    (
+        "api.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../assets/api.js"),
+    ),
+    (
+        "editor.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../assets/editor.js"),
+    ),
+    (
+        "view3d.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../assets/view3d.js"),
+    ),
+    (
+        "params.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../assets/params.js"),
+    ),
+    (
+        "layers.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../assets/layers.js"),
+    ),
+    (
+        "print.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../assets/print.js"),
+    ),
 ];
 
 /// The asset by name, or 404.

@@ -40,7 +40,12 @@ pub async fn stream(State(app): State<App>) -> Sse<impl Stream<Item = Result<Eve
 pub fn version(path: &std::path::Path) -> Option<String> {
     let meta = std::fs::metadata(path).ok()?;
     let t = meta.modified().ok()?.duration_since(UNIX_EPOCH).ok()?;
-    Some(format!("{}.{:09}-{}", t.as_secs(), t.subsec_nanos(), meta.len()))
+    Some(format!(
+        "{}.{:09}-{}",
+        t.as_secs(),
+        t.subsec_nanos(),
+        meta.len()
+    ))
 }
 
 fn versions(app: &App) -> BTreeMap<String, String> {

@@ -65,7 +65,10 @@ impl ModelFolder {
             return Err(not_a_name());
         }
         let mut parts = Path::new(name).components();
-        if !matches!((parts.next(), parts.next()), (Some(Component::Normal(_)), None)) {
+        if !matches!(
+            (parts.next(), parts.next()),
+            (Some(Component::Normal(_)), None)
+        ) {
             return Err(not_a_name());
         }
         let path = self.root.join(name);
@@ -145,11 +148,16 @@ mod tests {
         std::fs::write(outside.path().join("secret.txt"), "s").unwrap();
         std::os::unix::fs::symlink(outside.path().join("secret.txt"), dir.path().join("l.rhai"))
             .unwrap();
-        std::os::unix::fs::symlink(outside.path().join("none"), dir.path().join("d.stl"))
-            .unwrap();
+        std::os::unix::fs::symlink(outside.path().join("none"), dir.path().join("d.stl")).unwrap();
         let f = ModelFolder::open(dir.path()).unwrap();
-        assert!(matches!(f.resolve("l.rhai"), Err(FolderError::Outside { .. })));
-        assert!(matches!(f.resolve("d.stl"), Err(FolderError::Outside { .. })));
+        assert!(matches!(
+            f.resolve("l.rhai"),
+            Err(FolderError::Outside { .. })
+        ));
+        assert!(matches!(
+            f.resolve("d.stl"),
+            Err(FolderError::Outside { .. })
+        ));
         assert!(f.files_with(&["rhai"]).is_empty());
     }
 }

@@ -33,6 +33,7 @@ pub mod printing;
 mod routes;
 pub mod slicing;
 
+use std::future::IntoFuture;
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -45,6 +46,9 @@ pub use app::App;
 /// shows it at once after an edit, then a finer one. Chosen so every classic model's coarse
 /// preview stays under 100 ms from slider to screen (docs/studio.md has the measurements).
 pub const COARSE_DEPTH: u8 = 6;
+
+/// How long requests under way may take to finish when the studio is stopped.
+const SHUTDOWN_GRACE: std::time::Duration = std::time::Duration::from_secs(2);
 
 /// How to start a studio.
 #[derive(Debug, Clone)]
@@ -203,9 +207,22 @@ impl Studio {
         runtime.block_on(async move {
             let listener = tokio::net::TcpListener::from_std(self.listener)?;
             let watcher = tokio::spawn(events::watch(self.app.clone()));
-            let served = axum::serve(listener, routes::router(self.app))
-                .with_graceful_shutdown(async move { stop.notified().await })
-                .await;
+            let (stopping, stopped) = tokio::sync::oneshot::channel::<()>();
+            let graceful = axum::serve(listener, routes::router(self.app))
+                .with_graceful_shutdown(async move {
+                    stop.notified().await;
+                    let _ = stopping.send(());
+                })
+                .into_future();
+            // An open page holds its event stream open for ever: requests under way get a
+            // moment to finish, then the server stops regardless.
+            let served = tokio::select! {
+                served = graceful => served,
+                _ = async {
+                    let _ = stopped.await;
+                    tokio::time::sleep(SHUTDOWN_GRACE).await;
+                } => Ok(()),
+            };
             watcher.abort();
             served
         })?;

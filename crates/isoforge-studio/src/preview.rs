@@ -41,7 +41,8 @@ pub struct Facts {
 /// Meshes a loaded model at `depth` (2^depth cells along the region's longest side).
 pub fn mesh(model: &Loaded, depth: u8) -> Result<(Mesh, Facts), isoforge_mesh::MeshError> {
     let started = Instant::now();
-    let mesh = isoforge_mesh::try_mesh_shape(&model.shape, &MeshSettings::new(model.bounds, depth))?;
+    let mesh =
+        isoforge_mesh::try_mesh_shape(&model.shape, &MeshSettings::new(model.bounds, depth))?;
     let seconds = started.elapsed().as_secs_f64();
     let report = check(&mesh);
     let facts = Facts {
@@ -67,7 +68,8 @@ pub fn encode(mesh: &Mesh, header: &serde_json::Value) -> Vec<u8> {
     while json.len() % 4 != 0 {
         json.push(b' ');
     }
-    let mut out = Vec::with_capacity(16 + json.len() + mesh.vertices.len() * 12 + mesh.triangles.len() * 12);
+    let mut out =
+        Vec::with_capacity(16 + json.len() + mesh.vertices.len() * 12 + mesh.triangles.len() * 12);
     out.extend_from_slice(b"ISOP");
     out.extend_from_slice(&(json.len() as u32).to_le_bytes());
     out.extend_from_slice(&json);

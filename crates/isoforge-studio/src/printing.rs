@@ -121,10 +121,7 @@ impl PrintStatus {
         self.eta_seconds = p.eta.map(|d| d.as_secs_f64());
         self.state = if p.paused { "paused" } else { "running" };
         if let Some(t) = &p.temps {
-            self.hotend = t
-                .tools
-                .first()
-                .map(|r| [r.actual, r.target.unwrap_or(0.0)]);
+            self.hotend = t.tools.first().map(|r| [r.actual, r.target.unwrap_or(0.0)]);
             self.bed = t.bed.map(|r| [r.actual, r.target.unwrap_or(0.0)]);
         }
     }

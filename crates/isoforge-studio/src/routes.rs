@@ -204,7 +204,10 @@ async fn preview_mesh(
     if req.depth > MAX_PREVIEW_DEPTH {
         return Err(ApiError::new(
             StatusCode::BAD_REQUEST,
-            format!("depth {} is beyond the preview's {MAX_PREVIEW_DEPTH}", req.depth),
+            format!(
+                "depth {} is beyond the preview's {MAX_PREVIEW_DEPTH}",
+                req.depth
+            ),
         ));
     }
     app.jobs.arrive(req.job);
@@ -241,11 +244,7 @@ async fn preview_mesh(
         "job": req.job,
     });
     let bytes = preview::encode(&mesh, &header);
-    Ok((
-        [(header::CONTENT_TYPE, "application/octet-stream")],
-        bytes,
-    )
-        .into_response())
+    Ok(([(header::CONTENT_TYPE, "application/octet-stream")], bytes).into_response())
 }
 
 #[derive(Deserialize)]
@@ -323,7 +322,9 @@ async fn export(State(app): State<App>, Json(req): Json<ExportRequest>) -> ApiRe
     if depth > MAX_PREVIEW_DEPTH {
         return Err(ApiError::new(
             StatusCode::BAD_REQUEST,
-            format!("depth {depth}: at most {MAX_PREVIEW_DEPTH} here (the command line goes further)"),
+            format!(
+                "depth {depth}: at most {MAX_PREVIEW_DEPTH} here (the command line goes further)"
+            ),
         ));
     }
     let profile = match &req.profile {
@@ -340,7 +341,13 @@ async fn export(State(app): State<App>, Json(req): Json<ExportRequest>) -> ApiRe
         .and_then(|s| s.to_str())
         .unwrap_or("job")
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect::<String>();
     let bytes = tokio::task::spawn_blocking(move || -> Result<Vec<u8>, String> {
         match (mesh_format, profile) {
@@ -354,15 +361,20 @@ async fn export(State(app): State<App>, Json(req): Json<ExportRequest>) -> ApiRe
             (None, Some(p)) if format == "gcode" => slicing::gcode(&loaded, &p)
                 .map(|j| j.gcode.into_bytes())
                 .map_err(|e| e.to_string()),
-            (None, Some(p)) => slicing::sl1_archive(&loaded, &p, &job_name).map_err(|e| e.to_string()),
+            (None, Some(p)) => {
+                slicing::sl1_archive(&loaded, &p, &job_name).map_err(|e| e.to_string())
+            }
         }
     })
     .await
     .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e))?
     .map_err(|e| ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, e))?;
-    let mut response = ([(header::CONTENT_TYPE, "application/octet-stream")], bytes).into_response();
+    let mut response =
+        ([(header::CONTENT_TYPE, "application/octet-stream")], bytes).into_response();
     if let Ok(v) = HeaderValue::from_str(&format!("attachment; filename=\"{name}\"")) {
-        response.headers_mut().insert(header::CONTENT_DISPOSITION, v);
+        response
+            .headers_mut()
+            .insert(header::CONTENT_DISPOSITION, v);
     }
     Ok(response)
 }

@@ -5,8 +5,8 @@
 use std::io::Cursor;
 
 use isoforge_slice::{
-    GcodeJob, GridSpec, Profile, ProfileError, SliceError, Source, Technology, render_layers,
-    sl1, slice_gcode,
+    GcodeJob, GridSpec, Profile, ProfileError, SliceError, Source, Technology, render_layers, sl1,
+    slice_gcode,
 };
 use serde::Serialize;
 
@@ -65,7 +65,9 @@ pub enum ProfileChoiceError {
 /// Every profile on offer: the built-in ones first, then the folder's that read as
 /// profiles (other `.toml` files are left out).
 pub fn profiles(folder: &ModelFolder) -> Vec<ProfileInfo> {
-    let builtin = BUILTIN.iter().map(|(name, _)| format!("{BUILTIN_PREFIX}{name}"));
+    let builtin = BUILTIN
+        .iter()
+        .map(|(name, _)| format!("{BUILTIN_PREFIX}{name}"));
     let own = folder.files_with(&["toml"]).into_iter();
     builtin
         .chain(own)
@@ -90,10 +92,10 @@ pub fn profile(folder: &ModelFolder, id: &str) -> Result<Profile, ProfileChoiceE
 }
 
 fn info(id: &str, p: &Profile) -> Option<ProfileInfo> {
-    let name = p
-        .raw("name")
-        .and_then(|v| v.as_str())
-        .map_or_else(|| id.trim_start_matches(BUILTIN_PREFIX).to_string(), str::to_string);
+    let name = p.raw("name").and_then(|v| v.as_str()).map_or_else(
+        || id.trim_start_matches(BUILTIN_PREFIX).to_string(),
+        str::to_string,
+    );
     match p.technology() {
         Technology::Fdm => {
             let s = p.fdm().ok()?;
@@ -124,7 +126,11 @@ fn info(id: &str, p: &Profile) -> Option<ProfileInfo> {
 /// Slices a model to G-code with an FDM profile.
 pub fn gcode(model: &Loaded, profile: &Profile) -> Result<GcodeJob, SliceError> {
     let settings = profile.fdm()?;
-    slice_gcode(&Source::field(&model.shape, model.bounds), &settings, &|_, _| {})
+    slice_gcode(
+        &Source::field(&model.shape, model.bounds),
+        &settings,
+        &|_, _| {},
+    )
 }
 
 /// Slices a model into an SL1 archive with a resin profile; `job` names the layers inside.
