@@ -65,7 +65,7 @@ pub fn mesh(model: &Loaded, depth: u8) -> Result<(Mesh, Facts), isoforge_mesh::M
 /// so the page hands both arrays to WebGL as they are.
 pub fn encode(mesh: &Mesh, header: &serde_json::Value) -> Vec<u8> {
     let mut json = header.to_string().into_bytes();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let mut out =

@@ -112,7 +112,7 @@ pub struct PrintStatus {
 const NOTES_KEPT: usize = 8;
 
 impl PrintStatus {
-    fn from_progress(&mut self, p: &Progress) {
+    fn take_progress(&mut self, p: &Progress) {
         self.executed = p.executed;
         self.total = p.total;
         self.percent = p.percent;
@@ -394,7 +394,7 @@ fn run(
     let report = streamer::stream(&mut *port, job, Config::default(), control, |u| {
         let mut s = lock(status);
         match u {
-            Update::Progress(p) => s.from_progress(p),
+            Update::Progress(p) => s.take_progress(p),
             Update::Event(Event::Warning(w)) => s.note(format!("warning: {w}")),
             Update::Event(Event::Paused(true)) => s.note("the printer asked to pause".into()),
             Update::Event(Event::Paused(false)) => s.note("the printer asked to resume".into()),

@@ -8,7 +8,7 @@ use std::net::TcpListener;
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
-use std::sync::{Mutex, MutexGuard, PoisonError};
+use std::sync::{Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
 use fantoccini::{Client, ClientBuilder, Locator};
@@ -44,12 +44,10 @@ pub struct Browser {
     driver: Child,
     _profile: tempfile::TempDir,
     pub downloads: tempfile::TempDir,
-    _turn: MutexGuard<'static, ()>,
 }
 
 impl Browser {
     pub async fn start() -> Browser {
-        let turn = ONE_AT_A_TIME.lock().unwrap_or_else(PoisonError::into_inner);
         let (chromium, driver_bin) = binaries();
         let port = free_port();
         // Its own process group, so the browsers it starts go with it (see `Drop`).
@@ -110,7 +108,6 @@ impl Browser {
             driver,
             _profile: profile,
             downloads,
-            _turn: turn,
         }
     }
 
@@ -219,8 +216,9 @@ pub fn model_share(png_bytes: &[u8]) -> f64 {
     model as f64 / px.len() as f64
 }
 
-/// A single-threaded runtime for one async test body.
+/// Runs one browser test's body on a runtime of its own, one test at a time.
 pub fn run<F: std::future::Future<Output = ()>>(body: F) {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(PoisonError::into_inner);
     tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
