@@ -376,6 +376,26 @@ fn printing_to_the_fake_printer_runs_every_line_once() {
                 .await,
             100
         );
+        // Printing sliced it first: the layer view scrubs through the layers.
+        assert!(number(&b, "document.getElementById('layers').dataset.extrusions").await > 0.0);
+        let scrub = b.client.find(Locator::Id("layer")).await.unwrap();
+        scrub
+            .send_keys(&char::from(Key::Home).to_string())
+            .await
+            .unwrap();
+        assert_eq!(
+            number(&b, "document.getElementById('layers').dataset.layer").await,
+            0.0
+        );
+        scrub
+            .send_keys(&char::from(Key::End).to_string())
+            .await
+            .unwrap();
+        let last = number(&b, "document.getElementById('layers').dataset.layer").await;
+        assert_eq!(
+            last,
+            number(&b, "document.getElementById('layer').max").await
+        );
         // What the printer executed is the file, line by line, each line once.
         let executed = b
             .js("return fetch('/api/fake-printer/executed').then(r => r.json())")
