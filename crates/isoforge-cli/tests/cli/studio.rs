@@ -188,3 +188,134 @@ fn a_missing_model_is_an_error() {
     assert_eq!(out.status.code(), Some(1), "{out:?}");
     assert!(String::from_utf8_lossy(&out.stderr).contains("no such file"));
 }
+
+/// Calls the API with the session cookie; the body as JSON.
+fn api(
+    studio: &StudioProcess,
+    method: &str,
+    target: &str,
+    body: &serde_json::Value,
+) -> (u16, serde_json::Value) {
+    let cookie = format!(
+        "isoforge_studio_{}={}",
+        studio.authority.rsplit(':').next().unwrap(),
+        studio.token
+    );
+    let text = if body.is_null() {
+        String::new()
+    } else {
+        body.to_string()
+    };
+    let (status, reply) = studio.request(
+        method,
+        target,
+        &[("cookie", &cookie), ("content-type", "application/json")],
+        &text,
+    );
+    (
+        status,
+        serde_json::from_str(&reply).unwrap_or(serde_json::Value::Null),
+    )
+}
+
+fn wait_for_state(studio: &StudioProcess, states: &[&str]) -> serde_json::Value {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
+    loop {
+        let (_, r) = api(studio, "GET", "/api/print", &serde_json::Value::Null);
+        let state = r["status"]["state"].as_str().unwrap_or("").to_string();
+        if states.contains(&state.as_str()) {
+            return r["status"].clone();
+        }
+        assert!(std::time::Instant::now() < deadline, "still {state}: {r}");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn a_cancelled_print_resumes_from_its_journal() {
+    let dir = folder_with_model();
+    let studio = StudioProcess::start(&dir.path().join("ball.rhai"));
+    let text = std::fs::read_to_string(dir.path().join("ball.rhai")).unwrap();
+    let (status, sliced) = api(
+        &studio,
+        "POST",
+        "/api/slice",
+        &serde_json::json!({"name": "ball.rhai", "text": text, "params": [["r", 1.5]], "profile": "builtin:generic_marlin_220.toml"}),
+    );
+    assert_eq!(status, 200, "{sliced}");
+    assert_eq!(sliced["file"], "ball.gcode");
+    let (_, fake) = api(&studio, "POST", "/api/fake-printer", &serde_json::json!({}));
+    let port = fake["path"]
+        .as_str()
+        .expect("the fake printer's path")
+        .to_string();
+    let (_, ports) = api(&studio, "GET", "/api/ports", &serde_json::Value::Null);
+    assert!(
+        ports
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|p| p["path"] == port.as_str() && p["kind"] == "fake")
+    );
+    let start = serde_json::json!({"file": "ball.gcode", "port": port});
+    let (status, r) = api(&studio, "POST", "/api/print", &start);
+    assert_eq!(status, 200, "{r}");
+    // Paused while the fake printer heats up (a quarter of a second), then cancelled.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    while api(&studio, "GET", "/api/print", &serde_json::Value::Null).1["status"]["executed"] == 0 {
+        assert!(std::time::Instant::now() < deadline, "nothing executed");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let (status, _) = api(&studio, "POST", "/api/print/pause", &serde_json::json!({}));
+    assert_eq!(status, 200);
+    wait_for_state(&studio, &["paused"]);
+    let (status, _) = api(&studio, "POST", "/api/print/cancel", &serde_json::json!({}));
+    assert_eq!(status, 200);
+    let cancelled = wait_for_state(&studio, &["cancelled", "completed", "failed"]);
+    assert_eq!(cancelled["state"], "cancelled", "{cancelled}");
+    let done_before = cancelled["executed"].as_u64().unwrap();
+    let total = cancelled["total"].as_u64().unwrap();
+    assert!(done_before > 0 && done_before < total, "{cancelled}");
+    // A fresh start would lose the unfinished job: refused until asked to restart.
+    let (status, r) = api(&studio, "POST", "/api/print", &start);
+    assert_eq!(status, 409, "{r}");
+    let (_, r) = api(
+        &studio,
+        "GET",
+        "/api/print?file=ball.gcode",
+        &serde_json::Value::Null,
+    );
+    assert_eq!(r["resumable"], true);
+    let resume = serde_json::json!({"file": "ball.gcode", "port": port, "resume": true});
+    let (status, r) = api(&studio, "POST", "/api/print", &resume);
+    assert_eq!(status, 200, "{r}");
+    assert!(
+        r["status"]["resume_plan"]
+            .as_str()
+            .is_some_and(|p| !p.is_empty()),
+        "{r}"
+    );
+    let done = wait_for_state(&studio, &["completed", "cancelled", "failed"]);
+    assert_eq!(done["state"], "completed", "{done}");
+    assert_eq!(done["executed"], total);
+    // The resumed job went on from where the first stopped: the printer did not run the
+    // file twice.
+    let (_, executed) = api(
+        &studio,
+        "GET",
+        "/api/fake-printer/executed",
+        &serde_json::Value::Null,
+    );
+    let numbered = executed
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["line"].is_u64())
+        .count() as u64;
+    assert!(
+        numbered < total + done_before,
+        "{numbered} numbered lines for {total} commands"
+    );
+    let journal = std::fs::read_to_string(dir.path().join("ball.gcode.journal")).unwrap();
+    assert!(journal.contains("\"completed\""), "{journal}");
+}
