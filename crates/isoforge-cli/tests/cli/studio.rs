@@ -298,23 +298,39 @@ fn a_cancelled_print_resumes_from_its_journal() {
     let done = wait_for_state(&studio, &["completed", "cancelled", "failed"]);
     assert_eq!(done["state"], "completed", "{done}");
     assert_eq!(done["executed"], total);
-    // The resumed job went on from where the first stopped: the printer did not run the
-    // file twice.
+    // What the printer ran: the file's first commands up to the cancel, then (after the
+    // cancel sequence and the resume's heat-up and moves) the rest of the file, each once.
     let (_, executed) = api(
         &studio,
         "GET",
         "/api/fake-printer/executed",
         &serde_json::Value::Null,
     );
-    let numbered = executed
+    let ran: Vec<String> = executed
         .as_array()
         .unwrap()
         .iter()
         .filter(|e| e["line"].is_u64())
-        .count() as u64;
+        .filter_map(|e| e["command"].as_str().map(str::to_string))
+        .filter(|c| !c.starts_with("M110"))
+        .collect();
+    let file: Vec<String> = isoforge_host::gcode::read_file(&dir.path().join("ball.gcode"))
+        .unwrap()
+        .commands
+        .into_iter()
+        .map(|c| c.text)
+        .collect();
+    let k = done_before as usize;
+    assert_eq!(ran[..k], file[..k]);
     assert!(
-        numbered < total + done_before,
-        "{numbered} numbered lines for {total} commands"
+        ran.ends_with(&file[k..]),
+        "the resumed run is not the rest of the file"
+    );
+    assert!(
+        ran.len() < file.len() + k + 40,
+        "{} commands ran for a {}-command file",
+        ran.len(),
+        file.len()
     );
     let journal = std::fs::read_to_string(dir.path().join("ball.gcode.journal")).unwrap();
     assert!(journal.contains("\"completed\""), "{journal}");
