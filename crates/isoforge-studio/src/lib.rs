@@ -185,11 +185,6 @@ impl Studio {
         &self.url
     }
 
-    /// The shared state (tests drive the fake printer through it).
-    pub fn app(&self) -> &App {
-        &self.app
-    }
-
     /// A handle that ends [`serve`](Self::serve) from any thread.
     pub fn stop_handle(&self) -> StopHandle {
         StopHandle(self.stop.clone())
@@ -230,11 +225,6 @@ impl Studio {
         // Open event streams keep connections alive; do not wait for them.
         runtime.shutdown_background();
         Ok(())
-    }
-
-    /// The router alone, for tests that send requests without a socket.
-    pub fn router(&self) -> axum::Router {
-        routes::router(self.app.clone())
     }
 }
 
