@@ -61,7 +61,9 @@ function fineDepth() { return Number($('fine-depth').value); }
 // An edit happened (text, slider, file reloaded): start its coarse preview now, or fold it
 // into the next one if a coarse preview is on its way.
 function edited() {
-  studio.job += 1;
+  // Numbered by the clock (microseconds), not from 1: the server drops requests older than
+  // the newest it has seen, and a reloaded page must not look older than its last life.
+  studio.job = Math.max(studio.job + 1, Math.round((performance.timeOrigin + performance.now()) * 1000));
   performance.mark(`edit-${studio.job}`);
   if (studio.fine) { studio.fine.abort(); studio.fine = null; }
   if (studio.coarseBusy) { studio.again = true; return; }

@@ -79,8 +79,12 @@ impl Access {
         if !self.hosts.is_empty() && !host.is_some_and(|h| self.hosts.iter().any(|a| a == h)) {
             return Err(Refusal::Host);
         }
+        // The printed address opened from another page (a link in a web terminal) carries the
+        // token itself: that one cross-site request is the user's own.
+        let query_ok = query_token.is_some_and(|t| same_secret(t, &self.token));
         if let Some(site) = headers.get("sec-fetch-site").and_then(|v| v.to_str().ok())
             && site == "cross-site"
+            && !query_ok
         {
             return Err(Refusal::CrossSite);
         }
@@ -223,8 +227,14 @@ mod tests {
             ("origin", "http://evil.example"),
         ]);
         assert_eq!(a.check(&cross, Some("abc")), Err(Refusal::CrossSite));
-        let fetch = headers(&[("host", "localhost:8000"), ("sec-fetch-site", "cross-site")]);
-        assert_eq!(a.check(&fetch, Some("abc")), Err(Refusal::CrossSite));
+        let fetch = headers(&[
+            ("host", "localhost:8000"),
+            ("sec-fetch-site", "cross-site"),
+            ("cookie", "isoforge_studio_8000=abc"),
+        ]);
+        assert_eq!(a.check(&fetch, None), Err(Refusal::CrossSite));
+        // A link to the printed address, followed from another page, carries the token.
+        assert_eq!(a.check(&fetch, Some("abc")), Ok(()));
         let same = headers(&[
             ("host", "localhost:8000"),
             ("origin", "http://localhost:8000"),

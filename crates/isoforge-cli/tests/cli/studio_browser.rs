@@ -322,6 +322,15 @@ fn a_change_on_disk_is_reloaded() {
         assert_ne!(triangles(&b).await, t0);
         let v = volume(&b).await;
         assert!((v - 8.0).abs() < 0.05, "a 2 mm cube has 8 mm³, not {v}");
+        // A reloaded page is not taken for an older edit: it gets its preview.
+        b.client.refresh().await.expect("reload");
+        settle(&b).await;
+        assert_eq!(
+            b.js("return document.getElementById('problem').hidden")
+                .await,
+            Value::Bool(true)
+        );
+        assert!((volume(&b).await - 8.0).abs() < 0.05);
         b.close().await;
     });
 }
