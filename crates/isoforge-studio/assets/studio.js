@@ -78,6 +78,7 @@ async function coarse() {
   let ok = false;
   try {
     const p = await fetchPreview({ ...model(), depth: COARSE_DEPTH, job });
+    performance.mark(`fetched-${job}`);
     show(p, job);
     ok = true;
   } catch (e) {
@@ -123,11 +124,18 @@ function show(p, job) {
   view.setMesh(positions, indices);
   showFacts(header.facts);
   const depth = header.facts.depth;
-  view.requestDraw(() => {
-    // On screen: the frame after the one that drew it.
+  if (depth === COARSE_DEPTH) performance.mark(`uploaded-${job}`);
+  view.drawNow(() => {
+    // On screen: the animation frame after the drawing. The parts: the request (script,
+    // mesh, transfer), the upload (normals, buffers, controls), and the frames.
     if (depth === COARSE_DEPTH) {
       const m = performance.measure(`coarse-preview-${job}`, `edit-${job}`);
-      studio.latencies.push({ job, ms: m.duration, triangles: header.facts.triangles });
+      const part = (a, b) => performance.measure(`${a}-${b}-${job}`, `${a}-${job}`, `${b}-${job}`).duration;
+      performance.mark(`shown-${job}`);
+      studio.latencies.push({
+        job, ms: m.duration, triangles: header.facts.triangles, meshMs: header.facts.seconds * 1000,
+        requestMs: part('edit', 'fetched'), uploadMs: part('fetched', 'uploaded'), frameMs: part('uploaded', 'shown'),
+      });
     }
     document.body.dataset.previewJob = job;
     document.body.dataset.previewDepth = depth;

@@ -124,7 +124,10 @@ function uniqueEdges(indices) {
 export class View3D {
   constructor(canvas) {
     this.canvas = canvas;
-    const gl = canvas.getContext('webgl2', { antialias: true, preserveDrawingBuffer: true });
+    // No multisampling: under software rendering (SwiftShader, as in headless browsers and
+    // machines without a GPU) it tripled the time from a new mesh to the screen
+    // (docs/studio.md, Speed).
+    const gl = canvas.getContext('webgl2', { antialias: false, preserveDrawingBuffer: false });
     if (!gl) throw new Error('this browser has no WebGL2');
     this.gl = gl;
     this.meshProgram = compile(gl, MESH_VS, MESH_FS);
@@ -311,6 +314,13 @@ export class View3D {
       this.afterDraw = [];
       if (done.length) requestAnimationFrame(() => done.forEach((f) => f()));
     });
+  }
+
+  // Draws at once (a new preview should not wait for the next frame to start drawing);
+  // `then` runs at the next animation frame, when the drawing is on screen.
+  drawNow(then) {
+    this.draw();
+    if (then) requestAnimationFrame(then);
   }
 
   draw() {

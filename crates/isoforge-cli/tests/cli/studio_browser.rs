@@ -457,7 +457,7 @@ fn with_scale_knob(text: &str) -> String {
 fn preview_latency() {
     run(async {
         let mut report = String::from(
-            "| model | coarse triangles | from rest: median / max ms | dragged: median / max ms |\n| --- | ---: | ---: | ---: |\n",
+            "| model | coarse triangles | from rest: median / max ms | of which request / mesh / upload / frames (median ms) | dragged: median / max ms |\n| --- | ---: | ---: | ---: | ---: |\n",
         );
         let b = Browser::start().await;
         let mut names: Vec<_> = std::fs::read_dir(fixtures().join("classic"))
@@ -465,6 +465,13 @@ fn preview_latency() {
             .filter_map(Result::ok)
             .map(|e| e.path())
             .filter(|p| p.extension().is_some_and(|e| e == "rhai"))
+            .filter(|p| {
+                // ISOFORGE_LATENCY_MODELS=heart,spaceship picks some.
+                std::env::var("ISOFORGE_LATENCY_MODELS").map_or(true, |only| {
+                    only.split(',')
+                        .any(|n| p.file_stem().is_some_and(|s| s.to_string_lossy() == n))
+                })
+            })
             .collect();
         names.sort();
         for path in names {
@@ -486,6 +493,7 @@ fn preview_latency() {
                 )
             };
             let mut rest = Vec::new();
+            let mut parts: [Vec<f64>; 4] = Default::default();
             for i in 1..=8 {
                 let before = b
                     .js(&set(1.0 - 0.01 * f64::from(i)))
@@ -499,7 +507,14 @@ fn preview_latency() {
                 )
                 .await;
                 settle(&b).await;
-                rest.push(number(&b, "studio.latencies[studio.latencies.length - 1].ms").await);
+                let last = "studio.latencies[studio.latencies.length - 1]";
+                rest.push(number(&b, &format!("{last}.ms")).await);
+                for (k, field) in ["requestMs", "meshMs", "uploadMs", "frameMs"]
+                    .iter()
+                    .enumerate()
+                {
+                    parts[k].push(number(&b, &format!("{last}.{field}")).await);
+                }
             }
             let triangles = number(
                 &b,
@@ -524,7 +539,11 @@ fn preview_latency() {
             };
             let (rm, rx) = stats(&rest);
             let (dm, dx) = stats(&dragged);
-            let row = format!("| {name} | {triangles} | {rm:.0} / {rx:.0} | {dm:.0} / {dx:.0} |\n");
+            let p: Vec<String> = parts.iter().map(|v| format!("{:.0}", stats(v).0)).collect();
+            let row = format!(
+                "| {name} | {triangles} | {rm:.0} / {rx:.0} | {} | {dm:.0} / {dx:.0} |\n",
+                p.join(" / ")
+            );
             print!("{row}");
             report.push_str(&row);
             drop(studio);
