@@ -38,6 +38,8 @@ enum Command {
     Print(cmd::print::PrintArgs),
     /// Run a simulated Marlin-style printer on a pseudo-terminal.
     FakePrinter(cmd::fake_printer::FakePrinterArgs),
+    /// Serve a local web page to edit, preview, slice and print a model.
+    Studio(cmd::studio::StudioArgs),
 }
 
 fn main() -> ExitCode {
@@ -61,6 +63,7 @@ fn main() -> ExitCode {
         Command::Slice(args) => cmd::slice::run(args, &global),
         Command::Print(args) => cmd::print::run(args, &global),
         Command::FakePrinter(args) => cmd::fake_printer::run(args, &global),
+        Command::Studio(args) => cmd::studio::run(args, &global),
     };
     match result {
         Ok(code) => code,

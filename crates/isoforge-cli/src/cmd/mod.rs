@@ -7,3 +7,4 @@ pub mod mesh;
 pub mod print;
 pub mod render;
 pub mod slice;
+pub mod studio;

@@ -4,6 +4,7 @@
 //! workspace is linked once.
 
 mod bad_scripts;
+mod browser;
 mod check;
 mod help;
 mod info;
@@ -12,6 +13,9 @@ mod outputs;
 mod print;
 mod render;
 mod slice;
+mod studio;
+mod studio_browser;
+mod studio_process;
 mod word;
 
 use std::path::{Path, PathBuf};
