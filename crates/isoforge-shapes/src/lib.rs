@@ -19,7 +19,9 @@
 
 pub mod classic;
 pub mod curve;
+pub mod evals;
 pub mod frame;
+pub mod modern;
 
 #[cfg(test)]
 mod reference;
