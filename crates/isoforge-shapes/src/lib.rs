@@ -21,6 +21,7 @@ pub mod classic;
 pub mod curve;
 pub mod evals;
 pub mod frame;
+pub mod hull;
 pub mod modern;
 
 #[cfg(test)]
