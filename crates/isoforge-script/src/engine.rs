@@ -4,6 +4,7 @@ use isoforge_field::Shape;
 use rhai::module_resolvers::DummyModuleResolver;
 use rhai::{Dynamic, Engine};
 
+use crate::facts::SharedFacts;
 use crate::params::Shared;
 
 /// Operations a script may run. The classic and benchmark models need a few thousand, a
@@ -25,7 +26,7 @@ const MAX_ARRAY: usize = 1 << 20;
 const MAX_MAP: usize = 1 << 16;
 
 /// Builds an engine with the library, limits and no way out of the sandbox.
-pub fn build(shared: &Shared) -> Engine {
+pub fn build(shared: &Shared, facts: &SharedFacts) -> Engine {
     let mut engine = Engine::new();
     // Without this rhai runs its own `/` and `^` on numbers and ignores ours (9/4 == 2).
     engine.set_fast_operators(false);
@@ -48,6 +49,7 @@ pub fn build(shared: &Shared) -> Engine {
     register_coordinates(&mut engine);
     crate::ops::register(&mut engine);
     crate::library::register(&mut engine);
+    crate::modern::register(&mut engine, facts);
     crate::params::register(&mut engine, shared);
     engine
 }

@@ -32,7 +32,9 @@ use rhai::Dynamic;
 mod args;
 mod engine;
 mod error;
+mod facts;
 mod library;
+mod modern;
 mod notation;
 mod ops;
 pub mod options;
@@ -136,7 +138,8 @@ fn run(path: &Path, source: &str, params: &[(String, f64)]) -> Result<Model, Scr
         overrides: params.to_vec(),
         ..Default::default()
     }));
-    let engine = engine::build(&shared);
+    let facts = facts::SharedFacts::default();
+    let engine = engine::build(&shared, &facts);
     let Some(last_line) = last_code_line(source) else {
         return Err(ScriptError::Empty {
             path: path.to_path_buf(),

@@ -22,8 +22,8 @@ pub use primitives::{
     box3, capsule, cone, cylinder, ellipsoid, gyroid, half_space, length2, length3, sphere, torus,
 };
 pub use transforms::{
-    mirror_x, mirror_y, mirror_z, move_by, rotate, rotate_x, rotate_y, rotate_z, scale,
-    scale_uniform, twist,
+    matrix_axis, matrix_x, matrix_y, matrix_z, mirror_x, mirror_y, mirror_z, move_by, rotate,
+    rotate_x, rotate_y, rotate_z, scale, scale_uniform, turned, twist,
 };
 
 /// A parameter a modern-library function cannot build with.

@@ -44,7 +44,7 @@ pub fn scale(s: &Shape, k: [f64; 3]) -> Result<Shape, ModernError> {
 }
 
 /// The shape turned by the rotation matrix `m`: looked up at `mᵀ p`.
-fn turned(s: &Shape, m: DMat3) -> Shape {
+pub fn turned(s: &Shape, m: DMat3) -> Shape {
     let [x, y, z] = xyz();
     // Row i of mᵀ is column i of m.
     let row = |c: DVec3| {
@@ -75,42 +75,65 @@ fn cos_sin(deg: f64) -> (f64, f64) {
     }
 }
 
-/// `rotate_x(s, deg)`: turned about the x axis.
-pub fn rotate_x(s: &Shape, deg: f64) -> Result<Shape, ModernError> {
+/// The matrix of a turn by `deg` about the x axis.
+pub fn matrix_x(deg: f64) -> Result<DMat3, ModernError> {
     let (c, sn) = cos_sin(finite("the angle", deg)?);
-    Ok(turned(
-        s,
-        DMat3::from_cols(DVec3::X, DVec3::new(0.0, c, sn), DVec3::new(0.0, -sn, c)),
+    Ok(DMat3::from_cols(
+        DVec3::X,
+        DVec3::new(0.0, c, sn),
+        DVec3::new(0.0, -sn, c),
     ))
 }
 
-/// `rotate_y(s, deg)`: turned about the y axis.
-pub fn rotate_y(s: &Shape, deg: f64) -> Result<Shape, ModernError> {
+/// The matrix of a turn by `deg` about the y axis.
+pub fn matrix_y(deg: f64) -> Result<DMat3, ModernError> {
     let (c, sn) = cos_sin(finite("the angle", deg)?);
-    Ok(turned(
-        s,
-        DMat3::from_cols(DVec3::new(c, 0.0, -sn), DVec3::Y, DVec3::new(sn, 0.0, c)),
+    Ok(DMat3::from_cols(
+        DVec3::new(c, 0.0, -sn),
+        DVec3::Y,
+        DVec3::new(sn, 0.0, c),
     ))
 }
 
-/// `rotate_z(s, deg)`: turned about the z axis.
-pub fn rotate_z(s: &Shape, deg: f64) -> Result<Shape, ModernError> {
+/// The matrix of a turn by `deg` about the z axis.
+pub fn matrix_z(deg: f64) -> Result<DMat3, ModernError> {
     let (c, sn) = cos_sin(finite("the angle", deg)?);
-    Ok(turned(
-        s,
-        DMat3::from_cols(DVec3::new(c, sn, 0.0), DVec3::new(-sn, c, 0.0), DVec3::Z),
+    Ok(DMat3::from_cols(
+        DVec3::new(c, sn, 0.0),
+        DVec3::new(-sn, c, 0.0),
+        DVec3::Z,
     ))
 }
 
-/// `rotate(s, axis, deg)`: turned about an axis through the origin (Rodrigues).
-pub fn rotate(s: &Shape, axis: [f64; 3], deg: f64) -> Result<Shape, ModernError> {
+/// The matrix of a turn by `deg` about an axis through the origin (Rodrigues).
+pub fn matrix_axis(axis: [f64; 3], deg: f64) -> Result<DMat3, ModernError> {
     let a = DVec3::from(finite3("the axis", axis)?);
     let len = a.length();
     if len == 0.0 {
         return Err(ModernError::ZeroVector { what: "the axis" });
     }
     let (c, sn) = cos_sin(finite("the angle", deg)?);
-    Ok(turned(s, rotation(a / len, c, sn)))
+    Ok(rotation(a / len, c, sn))
+}
+
+/// `rotate_x(s, deg)`: turned about the x axis.
+pub fn rotate_x(s: &Shape, deg: f64) -> Result<Shape, ModernError> {
+    Ok(turned(s, matrix_x(deg)?))
+}
+
+/// `rotate_y(s, deg)`: turned about the y axis.
+pub fn rotate_y(s: &Shape, deg: f64) -> Result<Shape, ModernError> {
+    Ok(turned(s, matrix_y(deg)?))
+}
+
+/// `rotate_z(s, deg)`: turned about the z axis.
+pub fn rotate_z(s: &Shape, deg: f64) -> Result<Shape, ModernError> {
+    Ok(turned(s, matrix_z(deg)?))
+}
+
+/// `rotate(s, axis, deg)`: turned about an axis through the origin.
+pub fn rotate(s: &Shape, axis: [f64; 3], deg: f64) -> Result<Shape, ModernError> {
+    Ok(turned(s, matrix_axis(axis, deg)?))
 }
 
 /// The rotation about unit axis `a` with cosine `c` and sine `s` (Rodrigues' formula).
