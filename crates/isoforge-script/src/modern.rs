@@ -90,13 +90,25 @@ fn register_primitives(engine: &mut Engine, facts: &SharedFacts) {
     let f = facts.clone();
     engine.register_fn("sphere", move |r: Dynamic| {
         let r = number_arg("sphere", 1, "r", &r)?;
-        primitive(&f, "sphere", lib::sphere(r), true, Some(Convex::ball(DVec3::ZERO, r)))
+        primitive(
+            &f,
+            "sphere",
+            lib::sphere(r),
+            true,
+            Some(Convex::ball(DVec3::ZERO, r)),
+        )
     });
     let f = facts.clone();
     engine.register_fn("box", move |size: Dynamic| {
         let size = vec3("box", 1, "[sx, sy, sz]", &size)?;
         let half = DVec3::from(size) / 2.0;
-        primitive(&f, "box", lib::box3(size), true, Some(Convex::new(Body::Box(half))))
+        primitive(
+            &f,
+            "box",
+            lib::box3(size),
+            true,
+            Some(Convex::new(Body::Box(half))),
+        )
     });
     let f = facts.clone();
     engine.register_fn("cylinder", move |r: Dynamic, h: Dynamic| {
@@ -171,7 +183,9 @@ fn register_transforms(engine: &mut Engine, facts: &SharedFacts) {
         let s = shape_only("move", 1, "s", &s)?;
         let v = vec3("move", 2, "[x, y, z]", &v)?;
         let moved = lib::move_by(&s, v);
-        transformed(&f, "move", &s, moved, true, |c| Some(c.moved(DVec3::from(v))))
+        transformed(&f, "move", &s, moved, true, |c| {
+            Some(c.moved(DVec3::from(v)))
+        })
     });
     let f = facts.clone();
     engine.register_fn("scale", move |s: Dynamic, k: Dynamic| {
@@ -182,10 +196,15 @@ fn register_transforms(engine: &mut Engine, facts: &SharedFacts) {
         };
         let uniform = uniform || (k[0] == k[1] && k[1] == k[2]);
         let scaled = lib::scale(&s, k);
-        transformed(&f, "scale", &s, scaled, uniform, |c| c.scaled(DVec3::from(k)))
+        transformed(&f, "scale", &s, scaled, uniform, |c| {
+            c.scaled(DVec3::from(k))
+        })
     });
     for (name, matrix) in [
-        ("rotate_x", lib::matrix_x as fn(f64) -> Result<DMat3, ModernError>),
+        (
+            "rotate_x",
+            lib::matrix_x as fn(f64) -> Result<DMat3, ModernError>,
+        ),
         ("rotate_y", lib::matrix_y),
         ("rotate_z", lib::matrix_z),
     ] {

@@ -20,7 +20,10 @@ fn meshed(source: &str, depth: u8) -> (bool, f64) {
 fn expect_volume(name: &str, source: &str, want: f64) {
     let (closed, volume) = meshed(source, 8);
     let error = (volume - want) / want;
-    println!("{name}: volume {volume:.3}, exact {want:.3}, error {:+.4}%", 100.0 * error);
+    println!(
+        "{name}: volume {volume:.3}, exact {want:.3}, error {:+.4}%",
+        100.0 * error
+    );
     assert!(closed, "{name}: not closed and manifold");
     assert!(
         error.abs() < 0.005,

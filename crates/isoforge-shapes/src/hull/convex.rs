@@ -110,6 +110,15 @@ impl Body {
     }
 }
 
+/// True for an orthogonal matrix (a rotation or reflection): balls stay balls under it.
+fn is_rotation(m: &DMat3) -> bool {
+    let p = *m * m.transpose();
+    (p - DMat3::IDENTITY)
+        .to_cols_array()
+        .iter()
+        .all(|e| e.abs() < 1e-12)
+}
+
 fn farthest(points: impl Iterator<Item = DVec3>, u: DVec3) -> DVec3 {
     let mut best = (f64::NEG_INFINITY, DVec3::ZERO);
     for p in points {
@@ -184,6 +193,71 @@ impl Convex {
     pub fn inflated(mut self, r: f64) -> Convex {
         self.inflate += r.max(0.0);
         self
+    }
+
+    /// The body without the ball it is grown by, and that ball's radius. For a hull the
+    /// ball all parts share comes out too: the hull of balls of radius 4 is the hull of
+    /// their centres grown by 4, a polytope on which GJK ends in a few exact steps instead
+    /// of creeping round a sphere.
+    pub fn core(&self) -> (Convex, f64) {
+        let mut inner = self.clone();
+        let mut grown = inner.inflate;
+        inner.inflate = 0.0;
+        if let Body::Hull(parts) = &inner.body {
+            let common = parts
+                .iter()
+                .map(|p| p.inflate)
+                .fold(f64::INFINITY, f64::min);
+            if common > 0.0 && common.is_finite() {
+                let shrunk: Vec<Convex> = parts
+                    .iter()
+                    .map(|p| {
+                        let mut p = p.clone();
+                        p.inflate -= common;
+                        p
+                    })
+                    .collect();
+                // Scaling by m keeps inflation as is: only its translation and frame change,
+                // so the shared ball's radius is the same in the hull's own frame when m
+                // is a rotation; a scaled hull keeps its inflation in the parts.
+                if is_rotation(&inner.m) {
+                    inner.body = Body::Hull(shrunk.into());
+                    grown += common;
+                }
+            }
+        }
+        (inner, grown)
+    }
+
+    /// The corners of the body when it is a polytope (points, segments, boxes, and hulls
+    /// and linear images of those, not grown), in world coordinates.
+    pub fn polytope_points(&self) -> Option<Vec<DVec3>> {
+        if self.inflate != 0.0 {
+            return None;
+        }
+        let local: Vec<DVec3> = match &self.body {
+            Body::Point => vec![DVec3::ZERO],
+            Body::Box(h) => (0..8)
+                .map(|i| {
+                    DVec3::new(
+                        if i & 1 == 0 { -h.x } else { h.x },
+                        if i & 2 == 0 { -h.y } else { h.y },
+                        if i & 4 == 0 { -h.z } else { h.z },
+                    )
+                })
+                .collect(),
+            Body::Segment(a, b) => vec![*a, *b],
+            Body::Points(ps) => ps.to_vec(),
+            Body::Hull(parts) => {
+                let mut all = Vec::new();
+                for p in parts.iter() {
+                    all.extend(p.polytope_points()?);
+                }
+                all
+            }
+            Body::Cylinder { .. } | Body::Cone { .. } | Body::Ellipsoid(_) => return None,
+        };
+        Some(local.into_iter().map(|p| self.m * p + self.t).collect())
     }
 
     /// The axis-aligned box around the body, from six supports.

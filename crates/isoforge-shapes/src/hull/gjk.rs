@@ -114,6 +114,15 @@ fn triangle(a: DVec3, b: DVec3, c: DVec3, out: &mut Simplex) -> DVec3 {
     a + ab * v + ac * w
 }
 
+/// The point of triangle a, b, c nearest `p`.
+pub fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+    let mut s = Simplex {
+        pts: [DVec3::ZERO; 4],
+        n: 0,
+    };
+    p + triangle(a - p, b - p, c - p, &mut s)
+}
+
 /// The closest point to the origin on tetrahedron a, b, c, d; `None` when the origin is
 /// inside it.
 fn tetrahedron(p: [DVec3; 4], out: &mut Simplex) -> Option<DVec3> {
@@ -152,8 +161,10 @@ fn tetrahedron(p: [DVec3; 4], out: &mut Simplex) -> Option<DVec3> {
 /// body's nearest point (the answer for a neighbouring point makes GJK converge in a
 /// few steps); `tolerance` is the absolute accuracy wanted, in mm.
 pub fn closest(body: &Convex, p: DVec3, hint: DVec3, tolerance: f64) -> Closest {
+    // The nearest point's outward normal is −hint, and along it the support is that
+    // point itself (for a smooth body): start there.
     let start = if hint.length_squared() > 0.0 {
-        hint
+        -hint
     } else {
         DVec3::X
     };

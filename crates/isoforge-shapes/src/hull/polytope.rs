@@ -99,6 +99,28 @@ pub fn hull_facets(points: &[DVec3]) -> Option<Vec<Facet>> {
     )
 }
 
+/// The hull of `points` as triangles with their planes, or `None` when the points span
+/// no volume.
+pub fn hull_triangles(points: &[DVec3]) -> Option<Vec<(Facet, [DVec3; 3])>> {
+    let faces = hull_faces(points)?;
+    Some(
+        faces
+            .iter()
+            .map(|&[a, b, c]| {
+                let corners = [points[a], points[b], points[c]];
+                let n = (corners[1] - corners[0])
+                    .cross(corners[2] - corners[0])
+                    .normalize();
+                let facet = Facet {
+                    normal: n,
+                    offset: n.dot(corners[0]),
+                };
+                (facet, corners)
+            })
+            .collect(),
+    )
+}
+
 /// The indices of the points that are vertices of their convex hull (all of them when
 /// the points span no volume).
 pub fn hull_vertices(points: &[DVec3]) -> Vec<usize> {

@@ -68,6 +68,26 @@ fn four_balls_make_a_rounded_tetrahedron() {
 }
 
 #[test]
+fn hull_of_two_boxes_is_an_exact_distance() {
+    // Two unit cubes side by side with a gap: their hull is the 3 x 1 x 1 box.
+    let s = field(vec![
+        Convex::new(Body::Box(DVec3::splat(0.5))),
+        Convex::new(Body::Box(DVec3::splat(0.5))).moved(DVec3::new(2.0, 0.0, 0.0)),
+    ]);
+    for (p, want) in [
+        ([1.0, 0.0, 0.0], -0.5),
+        ([1.0, 0.2, 0.1], -0.3),
+        ([1.0, 2.5, 0.0], 2.0),
+        ([4.5, 0.0, 0.0], 2.0),
+        ([3.5, 1.5, 0.0], 2f64.sqrt()),
+        ([-0.3, 0.0, 0.0], -0.2),
+    ] {
+        let got = at(&s, DVec3::from(p));
+        assert!((got - want).abs() < 1e-9, "{p:?}: {got} vs {want}");
+    }
+}
+
+#[test]
 fn hull_of_a_box_and_a_ball_contains_both_and_no_more() {
     let b = Convex::new(Body::Box(DVec3::splat(1.0)));
     let ball = Convex::ball(DVec3::new(5.0, 0.0, 0.0), 1.0);
@@ -127,18 +147,32 @@ proptest! {
         size in 0.01..6.0f64,
         f in proptest::collection::vec([0.0..=1.0f64, 0.0..=1.0f64, 0.0..=1.0f64], 8),
     ) {
-        let s = field(vec![
+        let curved = field(vec![
             Convex::new(Body::Cylinder { r: 1.0, half: 2.0 }),
             Convex::ball(DVec3::new(4.0, 1.0, 0.0), 1.5),
             Convex::new(Body::Box(DVec3::new(0.5, 0.5, 0.5))).moved(DVec3::new(0.0, -3.0, 1.0)),
         ]);
-        let tape = Tape::new(&s);
-        let i = IntervalEval::new().eval(&tape, boxed(lo, size));
-        let mut pe = PointEval::new();
-        for q in &f {
-            let p = [0, 1, 2].map(|k| lo[k] + q[k] * size);
-            let v = pe.eval(&tape, p);
-            prop_assert!(i.inf() <= v && v <= i.sup(), "{} at {:?} outside {:?}", v, p, i);
+        // Equal balls: a polytope core grown by 1.5 (the exact mode).
+        let balls = field(
+            [[0.0, 0.0, 0.0], [5.0, 1.0, 0.0], [1.0, 4.0, 2.0], [2.0, 1.0, -3.0]]
+                .iter()
+                .map(|c| Convex::ball(DVec3::from(*c), 1.5))
+                .collect(),
+        );
+        // Two boxes: a polytope core grown by nothing.
+        let boxes = field(vec![
+            Convex::new(Body::Box(DVec3::new(1.0, 2.0, 0.5))),
+            Convex::new(Body::Box(DVec3::splat(0.5))).moved(DVec3::new(4.0, 3.0, 1.0)),
+        ]);
+        for s in [curved, balls, boxes] {
+            let tape = Tape::new(&s);
+            let i = IntervalEval::new().eval(&tape, boxed(lo, size));
+            let mut pe = PointEval::new();
+            for q in &f {
+                let p = [0, 1, 2].map(|k| lo[k] + q[k] * size);
+                let v = pe.eval(&tape, p);
+                prop_assert!(i.inf() <= v && v <= i.sup(), "{} at {:?} outside {:?}", v, p, i);
+            }
         }
     }
 }
