@@ -40,6 +40,7 @@ mod ops;
 pub mod options;
 mod params;
 mod rhai_errors;
+mod volumes;
 
 pub use engine::{MAX_CALL_LEVELS, MAX_OPERATIONS};
 pub use error::{CallSite, Location, RuntimeCause, ScriptError};

@@ -22,7 +22,9 @@ pub mod curve;
 pub mod evals;
 pub mod frame;
 pub mod hull;
+pub mod metaballs;
 pub mod modern;
+pub mod probe;
 
 #[cfg(test)]
 mod reference;
