@@ -50,7 +50,7 @@ pub fn build(shared: &Shared, facts: &SharedFacts) -> Engine {
     crate::ops::register(&mut engine);
     crate::library::register(&mut engine);
     crate::modern::register(&mut engine, facts);
-    crate::volumes::register(&mut engine);
+    crate::volumes::register(&mut engine, facts);
     crate::params::register(&mut engine, shared);
     engine
 }

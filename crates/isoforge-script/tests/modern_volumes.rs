@@ -81,3 +81,46 @@ fn hull_of_four_spheres_is_steiners_rounded_tetrahedron() {
         want,
     );
 }
+
+#[test]
+fn one_metaball_at_threshold_one_is_its_sphere() {
+    let want = 4.0 / 3.0 * PI * 6f64.powi(3);
+    expect_volume(
+        "metaballs, Blinn",
+        "bounds([-8, -8, -8], [8, 8, 8]); metaballs([[0, 0, 0, 6]], 1)",
+        want,
+    );
+    expect_volume(
+        "metaballs, Wyvill",
+        r#"bounds([-8, -8, -8], [8, 8, 8]); metaballs([[0, 0, 0, 6]], 1, #{falloff: "wyvill"})"#,
+        want,
+    );
+}
+
+#[test]
+fn a_tube_round_a_circle_is_a_torus() {
+    expect_volume(
+        "curve_tube of a circle",
+        "bounds([-13, -13, -3], [13, 13, 3]);
+         curve_tube(|s| [10 * cos(s), 10 * sin(s), 0], |s, theta| 2, 0, 2 * PI)",
+        2.0 * PI * PI * 10.0 * 4.0,
+    );
+}
+
+#[test]
+fn a_flat_height_field_with_a_thickness_is_a_slab() {
+    expect_volume(
+        "cartesian slab",
+        "bounds([-5, -5, -3], [5, 5, 1]); cartesian(|x, y| 0, 2)",
+        10.0 * 10.0 * 2.0,
+    );
+}
+
+#[test]
+fn a_constant_radius_function_is_a_sphere() {
+    expect_volume(
+        "spherical",
+        "bounds([-6, -6, -6], [6, 6, 6]); spherical(|theta, phi| 5, [0, 0, 0])",
+        4.0 / 3.0 * PI * 125.0,
+    );
+}

@@ -21,10 +21,12 @@ pub mod classic;
 pub mod curve;
 pub mod evals;
 pub mod frame;
+pub mod functions;
 pub mod hull;
 pub mod metaballs;
 pub mod modern;
 pub mod probe;
+pub mod tube;
 
 #[cfg(test)]
 mod reference;
