@@ -4,7 +4,10 @@ use isoforge_field::Shape;
 use rhai::module_resolvers::DummyModuleResolver;
 use rhai::{Dynamic, Engine};
 
+use std::sync::Arc;
+
 use crate::facts::SharedFacts;
+use crate::import::Imports;
 use crate::params::Shared;
 
 /// Operations a script may run. The classic and benchmark models need a few thousand, a
@@ -26,7 +29,7 @@ const MAX_ARRAY: usize = 1 << 20;
 const MAX_MAP: usize = 1 << 16;
 
 /// Builds an engine with the library, limits and no way out of the sandbox.
-pub fn build(shared: &Shared, facts: &SharedFacts) -> Engine {
+pub fn build(shared: &Shared, facts: &SharedFacts, imports: &Arc<Imports>) -> Engine {
     let mut engine = Engine::new();
     // Without this rhai runs its own `/` and `^` on numbers and ignores ours (9/4 == 2).
     engine.set_fast_operators(false);
@@ -36,7 +39,7 @@ pub fn build(shared: &Shared, facts: &SharedFacts) -> Engine {
     engine.set_max_string_size(MAX_STRING);
     engine.set_max_array_size(MAX_ARRAY);
     engine.set_max_map_size(MAX_MAP);
-    // No `import`: a model cannot read other files (import_stl will be the one way).
+    // No `import`: a model cannot read other files (import_stl is the one way).
     engine.set_module_resolver(DummyModuleResolver::new());
     engine.disable_symbol("import");
     engine.disable_symbol("eval");
@@ -51,6 +54,7 @@ pub fn build(shared: &Shared, facts: &SharedFacts) -> Engine {
     crate::library::register(&mut engine);
     crate::modern::register(&mut engine, facts);
     crate::volumes::register(&mut engine, facts);
+    crate::import::register(&mut engine, imports, facts);
     crate::params::register(&mut engine, shared);
     engine
 }

@@ -33,6 +33,7 @@ mod args;
 mod engine;
 mod error;
 mod facts;
+mod import;
 mod library;
 mod modern;
 mod notation;
@@ -44,6 +45,7 @@ mod volumes;
 
 pub use engine::{MAX_CALL_LEVELS, MAX_OPERATIONS};
 pub use error::{CallSite, Location, RuntimeCause, ScriptError};
+pub use import::MAX_IMPORT_BYTES;
 
 /// A declared parameter.
 #[derive(Clone, Debug, PartialEq)]
@@ -140,7 +142,8 @@ fn run(path: &Path, source: &str, params: &[(String, f64)]) -> Result<Model, Scr
         ..Default::default()
     }));
     let facts = facts::SharedFacts::default();
-    let engine = engine::build(&shared, &facts);
+    let imports = import::Imports::new(path);
+    let engine = engine::build(&shared, &facts, &imports);
     let Some(last_line) = last_code_line(source) else {
         return Err(ScriptError::Empty {
             path: path.to_path_buf(),

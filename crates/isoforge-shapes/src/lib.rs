@@ -23,6 +23,7 @@ pub mod evals;
 pub mod frame;
 pub mod functions;
 pub mod hull;
+pub mod mesh_field;
 pub mod metaballs;
 pub mod modern;
 pub mod probe;
