@@ -53,9 +53,11 @@ impl Imports {
 /// The key of the cross-run cache: the file as resolved, its size and time.
 type CacheKey = (PathBuf, u64, Option<SystemTime>);
 
-fn cache() -> &'static Mutex<Vec<(CacheKey, Arc<MeshField>)>> {
-    static CACHE: std::sync::OnceLock<Mutex<Vec<(CacheKey, Arc<MeshField>)>>> =
-        std::sync::OnceLock::new();
+/// Meshes read by earlier runs, oldest first.
+type Cache = Mutex<Vec<(CacheKey, Arc<MeshField>)>>;
+
+fn cache() -> &'static Cache {
+    static CACHE: std::sync::OnceLock<Cache> = std::sync::OnceLock::new();
     CACHE.get_or_init(|| Mutex::new(Vec::new()))
 }
 
