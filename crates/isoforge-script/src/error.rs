@@ -130,6 +130,33 @@ pub enum RuntimeCause {
         /// What was given.
         found: String,
     },
+    /// The script ran longer than the wall-clock limit.
+    #[error(
+        "the script ran longer than {seconds} s, the limit for a model script (an endless or \
+         very long loop?)"
+    )]
+    TimeLimit {
+        /// The limit in seconds.
+        seconds: f64,
+    },
+    /// The script made the process grow by more than the memory limit.
+    #[error(
+        "the script used more than {} MiB of memory, the limit for a model script (does it \
+         keep many large strings, arrays or maps?)",
+        bytes >> 20
+    )]
+    MemoryLimit {
+        /// The limit in bytes.
+        bytes: u64,
+    },
+    /// A string, array or map grew past rhai's size limit.
+    #[error("the script built {what} larger than the limit of {limit} for a model script")]
+    DataTooLarge {
+        /// "a string", "an array", "an object map".
+        what: String,
+        /// The limit, with its unit.
+        limit: String,
+    },
     /// Anything else: a library function refused its arguments, a `throw`, rhai's own errors.
     #[error("{0}")]
     Failed(String),
