@@ -17,7 +17,13 @@ fn fixture(name: &str) -> PathBuf {
 
 /// Meshes a fixture through a probe; returns (points evaluated, boxes, dense corners).
 fn counted(name: &str, depth: u8) -> (u64, u64, u64) {
-    let model = load_file(&fixture(name), &[]).unwrap_or_else(|e| panic!("{e}"));
+    counted_at(&fixture(name), depth)
+}
+
+/// [`counted`] for a script anywhere.
+fn counted_at(path: &Path, depth: u8) -> (u64, u64, u64) {
+    let name = path.file_name().unwrap().to_string_lossy();
+    let model = load_file(path, &[]).unwrap_or_else(|e| panic!("{e}"));
     let bounds = model.bounds.expect("fixtures declare bounds");
     let (shape, counts) = probe(&model.shape);
     let mesh = mesh_shape(&shape, &MeshSettings::new(bounds, depth));
@@ -46,4 +52,23 @@ fn the_lava_lamp_is_pruned() {
     // a lamp full of balls is a good part of its region; without pruning it would be
     // all of it.
     assert!(points * 2 < dense, "{points} of {dense}");
+}
+
+#[test]
+fn the_imported_mesh_is_pruned() {
+    // The imported part (part.stl, 3,004 triangles) in a region 120 mm wide: the triangle
+    // hierarchy's enclosures must let the octree skip the empty space around it. (In the
+    // drilled fixture's own tight region nearly every 16-cell block meets the surface, so
+    // there is little to skip.)
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(fixture("part.stl"), dir.path().join("part.stl")).unwrap();
+    let script = dir.path().join("roomy_import.rhai");
+    std::fs::write(
+        &script,
+        "bounds([-60, -60, -60], [60, 60, 60]);\n\
+         difference(import_stl(\"part.stl\"), cylinder(3, 40))",
+    )
+    .unwrap();
+    let (points, _, dense) = counted_at(&script, 8);
+    assert!(points * 10 < dense, "{points} of {dense}");
 }
