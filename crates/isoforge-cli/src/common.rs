@@ -50,12 +50,19 @@ impl Global {
 pub struct ModelArgs {
     /// The model script (.rhai) or expression file (.vm).
     pub model: PathBuf,
-    /// Set a script parameter: NAME=VALUE (repeatable).
+    /// Set a script parameter: NAME=VALUE (repeatable). `render` and `mesh` also take a
+    /// range, NAME=FROM..TO:STEPS, and make one picture or mesh per step.
     #[arg(long = "param", value_name = "NAME=VALUE")]
     pub params: Vec<String>,
     /// The region: X0,Y0,Z0,X1,Y1,Z1 (overrides the script's bounds).
     #[arg(long, value_name = "X0,Y0,Z0,X1,Y1,Z1", allow_hyphen_values = true)]
     pub bounds: Option<String>,
+    /// Stop a script that runs longer than this (wall-clock seconds).
+    #[arg(long, value_name = "SECONDS", default_value_t = isoforge_script::DEFAULT_MAX_SECONDS)]
+    pub script_timeout: f64,
+    /// Stop a script that makes isoforge grow by more than this (MiB; Linux).
+    #[arg(long, value_name = "MIB", default_value_t = isoforge_script::DEFAULT_MAX_MEMORY_BYTES >> 20)]
+    pub script_memory: u64,
 }
 
 /// A model with the region it is to be worked on.
@@ -66,16 +73,83 @@ pub struct LoadedModel {
     pub bounds: Bounds,
 }
 
+/// A parameter swept over a range: `--param t=0..1:30`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sweep {
+    /// The parameter.
+    pub name: String,
+    /// Its values, first to last.
+    pub values: Vec<f64>,
+}
+
+/// The most steps a range may have: a frame or mesh is written per step.
+pub const MAX_STEPS: usize = 10_000;
+
+/// One `--param`: a value, or a range of steps.
+#[derive(Clone, Debug, PartialEq)]
+enum ParamValue {
+    One(f64),
+    Range(Vec<f64>),
+}
+
 impl ModelArgs {
-    /// Parses the overrides, runs the script and settles the region.
+    /// Parses the overrides, runs the script and settles the region. A range among the
+    /// parameters is a usage error here: only `render` and `mesh` sweep.
     pub fn load(&self) -> Result<LoadedModel> {
+        if let Some(sweep) = self.sweep()? {
+            return Err(usage(format!(
+                "--param {}=..: a range of values is for `isoforge render` (with --frames or \
+                 --gif) and `isoforge mesh`; give one value",
+                sweep.name
+            )));
+        }
+        self.load_values()
+    }
+
+    /// The parameter range, if one `--param` is a range (at most one may be).
+    pub fn sweep(&self) -> Result<Option<Sweep>> {
+        let mut found = None;
+        for p in &self.params {
+            if let (name, ParamValue::Range(values)) = parse_param(p)? {
+                if found.is_some() {
+                    return Err(usage(format!(
+                        "--param {p:?}: only one parameter may be given a range"
+                    )));
+                }
+                found = Some(Sweep { name, values });
+            }
+        }
+        Ok(found)
+    }
+
+    /// The same model arguments with the swept parameter fixed at `value`.
+    pub fn at_step(&self, sweep: &Sweep, value: f64) -> ModelArgs {
+        let mut args = self.clone();
+        for p in &mut args.params {
+            if matches!(parse_param(p), Ok((name, ParamValue::Range(_))) if name == sweep.name) {
+                // `{}` prints the shortest text that parses back to the same f64.
+                *p = format!("{}={value}", sweep.name);
+            }
+        }
+        args
+    }
+
+    /// Runs the script with single-valued parameters and settles the region.
+    fn load_values(&self) -> Result<LoadedModel> {
         let params = self
             .params
             .iter()
-            .map(|p| parse_param(p))
+            .map(|p| match parse_param(p)? {
+                (name, ParamValue::One(v)) => Ok((name, v)),
+                (name, ParamValue::Range(_)) => {
+                    Err(usage(format!("--param {name}=..: expected one value")))
+                }
+            })
             .collect::<Result<Vec<_>>>()?;
+        let limits = self.limits()?;
         let bounds = self.bounds.as_deref().map(parse_bounds).transpose()?;
-        let model = isoforge_script::load_file(&self.model, &params).map_err(with_flag_hint)?;
+        let model = isoforge_script::load_file_with(&self.model, &params, &limits)
+            .map_err(with_flag_hint)?;
         let bounds = match bounds {
             Some(b) => b,
             None => match model.bounds {
@@ -89,6 +163,25 @@ impl ModelArgs {
         isoforge_field::ensure_not_empty(&model.shape, &bounds)
             .map_err(|e| region_error(e).context(self.model.display().to_string()))?;
         Ok(LoadedModel { model, bounds })
+    }
+
+    /// The script's budgets from `--script-timeout` and `--script-memory`.
+    fn limits(&self) -> Result<isoforge_script::ScriptLimits> {
+        if !(self.script_timeout.is_finite() && self.script_timeout > 0.0) {
+            return Err(usage(format!(
+                "--script-timeout {}: expected a positive number of seconds",
+                self.script_timeout
+            )));
+        }
+        if self.script_memory == 0 {
+            return Err(usage(
+                "--script-memory 0: expected at least 1 MiB".to_string(),
+            ));
+        }
+        Ok(isoforge_script::ScriptLimits {
+            max_seconds: self.script_timeout,
+            max_memory_bytes: self.script_memory.saturating_mul(1 << 20),
+        })
     }
 }
 
@@ -118,15 +211,52 @@ fn region_error(e: RegionError) -> anyhow::Error {
     }
 }
 
-fn parse_param(text: &str) -> Result<(String, f64)> {
+/// Parses `NAME=VALUE` or `NAME=FROM..TO:STEPS` (STEPS values from FROM to TO, both
+/// included); a malformed text is a usage error.
+fn parse_param(text: &str) -> Result<(String, ParamValue)> {
     let Some((name, value)) = text.split_once('=') else {
         return Err(usage(format!("--param {text:?}: expected NAME=VALUE")));
     };
-    let value: f64 = value
-        .trim()
-        .parse()
-        .map_err(|_| usage(format!("--param {text:?}: {value:?} is not a number")))?;
-    Ok((name.trim().to_string(), value))
+    let name = name.trim().to_string();
+    let number = |v: &str| -> Result<f64> {
+        let n: f64 = v
+            .trim()
+            .parse()
+            .map_err(|_| usage(format!("--param {text:?}: {v:?} is not a number")))?;
+        if n.is_finite() {
+            Ok(n)
+        } else {
+            Err(usage(format!(
+                "--param {text:?}: {v:?} is not a finite number"
+            )))
+        }
+    };
+    let Some((from, rest)) = value.split_once("..") else {
+        return Ok((name, ParamValue::One(number(value)?)));
+    };
+    let range_form = || {
+        usage(format!(
+            "--param {text:?}: a range is NAME=FROM..TO:STEPS, e.g. t=0..1:30"
+        ))
+    };
+    let (to, steps) = rest.split_once(':').ok_or_else(range_form)?;
+    let (from, to) = (number(from)?, number(to)?);
+    let steps: usize = steps.trim().parse().map_err(|_| range_form())?;
+    if steps == 0 || steps > MAX_STEPS {
+        return Err(usage(format!(
+            "--param {text:?}: the number of steps must be 1 to {MAX_STEPS}"
+        )));
+    }
+    let values = (0..steps)
+        .map(|i| {
+            if steps == 1 {
+                from
+            } else {
+                from + (to - from) * i as f64 / (steps - 1) as f64
+            }
+        })
+        .collect();
+    Ok((name, ParamValue::Range(values)))
 }
 
 /// Parses `X0,Y0,Z0,X1,Y1,Z1`; a malformed text is a usage error.

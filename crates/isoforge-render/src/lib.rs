@@ -22,6 +22,7 @@
 //! # Ok::<(), std::io::Error>(())
 //! ```
 
+mod animation;
 mod camera;
 mod image;
 mod shade;
@@ -34,6 +35,7 @@ use crate::camera::Camera;
 use crate::trace::{Rect, trace};
 use crate::view::ViewField;
 
+pub use crate::animation::{GifWriter, write_gif};
 pub use crate::image::Image;
 pub use crate::view::View;
 

@@ -6,7 +6,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use rhai::module_resolvers::DummyModuleResolver;
 use rhai::{Dynamic, Engine};
 
+use std::sync::Arc;
+
+use std::time::Instant;
+
+use crate::facts::SharedFacts;
+use crate::import::Imports;
 use crate::params::Shared;
+use crate::{RuntimeCause, ScriptLimits};
 
 /// Operations a script may run. The classic and benchmark models need a few thousand, a
 /// curve follower's closure at most about 150 thousand (4096 frame samples, three calls
@@ -21,10 +28,20 @@ pub const MAX_CALL_LEVELS: usize = 200;
 /// The stack of the thread a script runs on (reserved address space, not memory used).
 pub const SCRIPT_STACK: usize = 512 << 20;
 
-/// Longest string, array and object map a script may build.
-const MAX_STRING: usize = 1 << 20;
-const MAX_ARRAY: usize = 1 << 20;
-const MAX_MAP: usize = 1 << 16;
+/// Longest string, array and object map a script may build (rhai counts what is nested
+/// inside an array or map towards these too).
+pub const MAX_STRING: usize = 1 << 20;
+/// Longest array (elements, nested arrays' included).
+pub const MAX_ARRAY: usize = 1 << 20;
+/// Largest object map (entries).
+pub const MAX_MAP: usize = 1 << 16;
+
+/// How often (in operations) the wall clock is read, and 16 times that the process's
+/// memory (`/proc/self/statm`, a few microseconds). One operation may copy a million-element
+/// array (about 12 ms): checking every 1024 operations let a 2 s limit stop a copying loop
+/// only after 7 s; every 16 bounds the overshoot near 0.2 s, and a clock read (about 20 ns)
+/// per 16 operations is under 2% of the cheapest loop's time.
+const CHECK_EVERY: u64 = 16;
 
 /// Builds an engine with the library, limits and no way out of the sandbox.
 /// Whether a script's `print()` and `debug()` reach stderr (see [`echo_prints`]).
@@ -36,7 +53,12 @@ pub fn echo_prints(on: bool) {
     ECHO_PRINTS.store(on, Ordering::Relaxed);
 }
 
-pub fn build(shared: &Shared) -> Engine {
+pub fn build(
+    shared: &Shared,
+    facts: &SharedFacts,
+    imports: &Arc<Imports>,
+    limits: &ScriptLimits,
+) -> Engine {
     let mut engine = Engine::new();
     // Without this rhai runs its own `/` and `^` on numbers and ignores ours (9/4 == 2).
     engine.set_fast_operators(false);
@@ -46,7 +68,8 @@ pub fn build(shared: &Shared) -> Engine {
     engine.set_max_string_size(MAX_STRING);
     engine.set_max_array_size(MAX_ARRAY);
     engine.set_max_map_size(MAX_MAP);
-    // No `import`: a model cannot read other files (import_stl will be the one way).
+    watch(&mut engine, limits);
+    // No `import`: a model cannot read other files (import_stl is the one way).
     engine.set_module_resolver(DummyModuleResolver::new());
     engine.disable_symbol("import");
     engine.disable_symbol("eval");
@@ -67,6 +90,9 @@ pub fn build(shared: &Shared) -> Engine {
     register_coordinates(&mut engine);
     crate::ops::register(&mut engine);
     crate::library::register(&mut engine);
+    crate::modern::register(&mut engine, facts);
+    crate::volumes::register(&mut engine, facts);
+    crate::import::register(&mut engine, imports, facts);
     crate::params::register(&mut engine, shared);
     engine
 }
@@ -89,4 +115,38 @@ fn register_coordinates(engine: &mut Engine) {
             _ => None,
         })
     });
+}
+
+/// Stops a script that runs longer than the wall-clock limit or makes the process grow by
+/// more than the memory limit. The operation limit alone does not bound time (copying a
+/// million-element array is one operation), and rhai's size limits bound each value, not
+/// how many of them a script keeps.
+fn watch(engine: &mut Engine, limits: &ScriptLimits) {
+    let started = Instant::now();
+    let baseline = resident_bytes();
+    let (seconds, memory) = (limits.max_seconds, limits.max_memory_bytes);
+    engine.on_progress(move |ops| {
+        if ops % CHECK_EVERY != 0 {
+            return None;
+        }
+        if started.elapsed().as_secs_f64() > seconds {
+            return Some(Dynamic::from(RuntimeCause::TimeLimit { seconds }));
+        }
+        if ops % (16 * CHECK_EVERY) == 0
+            && let (Some(now), Some(base)) = (resident_bytes(), baseline)
+            && now.saturating_sub(base) > memory
+        {
+            return Some(Dynamic::from(RuntimeCause::MemoryLimit { bytes: memory }));
+        }
+        None
+    });
+}
+
+/// The process's resident memory in bytes, where the system tells it (Linux).
+fn resident_bytes() -> Option<u64> {
+    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
+    // The page size is 4 KiB on the platforms isoforge builds for (x86-64, AArch64
+    // Linux with 4 KiB pages); a larger page only makes the check stricter.
+    Some(pages * 4096)
 }

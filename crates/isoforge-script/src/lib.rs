@@ -32,14 +32,20 @@ use rhai::Dynamic;
 mod args;
 mod engine;
 mod error;
+mod facts;
+mod import;
 mod library;
+mod modern;
 mod notation;
 mod ops;
+pub mod options;
 mod params;
 mod rhai_errors;
+mod volumes;
 
-pub use engine::{MAX_CALL_LEVELS, MAX_OPERATIONS, echo_prints};
+pub use engine::{MAX_ARRAY, MAX_CALL_LEVELS, MAX_MAP, MAX_OPERATIONS, MAX_STRING, echo_prints};
 pub use error::{CallSite, Location, RuntimeCause, ScriptError};
+pub use import::MAX_IMPORT_BYTES;
 
 /// A declared parameter.
 #[derive(Clone, Debug, PartialEq)]
@@ -52,6 +58,32 @@ pub struct Param {
     pub value: f64,
     /// The declared range, if any.
     pub range: Option<(f64, f64)>,
+}
+
+/// The sandbox's budgets beyond rhai's own (operations, call depth, value sizes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScriptLimits {
+    /// Wall-clock seconds a script may run.
+    pub max_seconds: f64,
+    /// Bytes the process may grow by while the script runs (measured where the system
+    /// reports it: Linux).
+    pub max_memory_bytes: u64,
+}
+
+/// 20 s: the slowest fixture script runs in well under a second; a script that needs
+/// more is almost surely looping by mistake, and an interactive user should not wait.
+pub const DEFAULT_MAX_SECONDS: f64 = 20.0;
+
+/// 1 GiB: importing a million-triangle mesh with its hierarchy takes about 300 MiB.
+pub const DEFAULT_MAX_MEMORY_BYTES: u64 = 1 << 30;
+
+impl Default for ScriptLimits {
+    fn default() -> Self {
+        ScriptLimits {
+            max_seconds: DEFAULT_MAX_SECONDS,
+            max_memory_bytes: DEFAULT_MAX_MEMORY_BYTES,
+        }
+    }
 }
 
 /// A loaded model.
@@ -67,6 +99,15 @@ pub struct Model {
 
 /// Loads a model file (`.rhai` script, or a `.vm` expression file) with parameter overrides.
 pub fn load_file(path: &Path, params: &[(String, f64)]) -> Result<Model, ScriptError> {
+    load_file_with(path, params, &ScriptLimits::default())
+}
+
+/// [`load_file`] with chosen limits.
+pub fn load_file_with(
+    path: &Path,
+    params: &[(String, f64)],
+    limits: &ScriptLimits,
+) -> Result<Model, ScriptError> {
     let bytes = read_capped(path)?;
     let text = String::from_utf8(bytes).map_err(|e| ScriptError::NotText {
         path: path.to_path_buf(),
@@ -78,7 +119,7 @@ pub fn load_file(path: &Path, params: &[(String, f64)]) -> Result<Model, ScriptE
     {
         load_vm(path, &text, params)
     } else {
-        load_script(path, &text, params)
+        load_script_with(path, &text, params, limits)
     }
 }
 
@@ -135,11 +176,21 @@ pub fn load_script(
     source: &str,
     params: &[(String, f64)],
 ) -> Result<Model, ScriptError> {
+    load_script_with(path, source, params, &ScriptLimits::default())
+}
+
+/// [`load_script`] with chosen limits.
+pub fn load_script_with(
+    path: &Path,
+    source: &str,
+    params: &[(String, f64)],
+    limits: &ScriptLimits,
+) -> Result<Model, ScriptError> {
     std::thread::scope(|scope| {
         let worker = std::thread::Builder::new()
             .name("isoforge-script".into())
             .stack_size(engine::SCRIPT_STACK)
-            .spawn_scoped(scope, || run(path, source, params))
+            .spawn_scoped(scope, || run(path, source, params, limits))
             .map_err(|e| ScriptError::Interpreter {
                 path: path.to_path_buf(),
                 what: format!("cannot start the script thread: {e}"),
@@ -153,12 +204,19 @@ pub fn load_script(
     })
 }
 
-fn run(path: &Path, source: &str, params: &[(String, f64)]) -> Result<Model, ScriptError> {
+fn run(
+    path: &Path,
+    source: &str,
+    params: &[(String, f64)],
+    limits: &ScriptLimits,
+) -> Result<Model, ScriptError> {
     let shared = Arc::new(Mutex::new(params::Declared {
         overrides: params.to_vec(),
         ..Default::default()
     }));
-    let engine = engine::build(&shared);
+    let facts = facts::SharedFacts::default();
+    let imports = import::Imports::new(path);
+    let engine = engine::build(&shared, &facts, &imports, limits);
     let Some(last_line) = last_code_line(source) else {
         return Err(ScriptError::Empty {
             path: path.to_path_buf(),

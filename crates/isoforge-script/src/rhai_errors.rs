@@ -105,6 +105,26 @@ fn describe(err: &EvalAltResult) -> RuntimeCause {
                 Err(_) => RuntimeCause::Failed(format!("{value}")),
             }
         }
+        EvalAltResult::ErrorTerminated(token, _) => token
+            .clone()
+            .try_cast::<RuntimeCause>()
+            .unwrap_or_else(|| RuntimeCause::Failed("the script was stopped".into())),
+        EvalAltResult::ErrorDataTooLarge(what, _) => {
+            let (what, limit) = if what.starts_with("Length of string") {
+                ("a string", format!("{} bytes", crate::engine::MAX_STRING))
+            } else if what.starts_with("Size of object map") {
+                (
+                    "an object map",
+                    format!("{} entries", crate::engine::MAX_MAP),
+                )
+            } else {
+                ("an array", format!("{} elements", crate::engine::MAX_ARRAY))
+            };
+            RuntimeCause::DataTooLarge {
+                what: what.into(),
+                limit,
+            }
+        }
         EvalAltResult::ErrorMismatchDataType(want, got, _) => RuntimeCause::WrongType {
             expected: want.clone(),
             found: got.clone(),

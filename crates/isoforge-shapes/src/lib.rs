@@ -19,7 +19,15 @@
 
 pub mod classic;
 pub mod curve;
+pub mod evals;
 pub mod frame;
+pub mod functions;
+pub mod hull;
+pub mod mesh_field;
+pub mod metaballs;
+pub mod modern;
+pub mod probe;
+pub mod tube;
 
 #[cfg(test)]
 mod reference;

@@ -17,8 +17,10 @@ use crate::common::{Global, ModelArgs, print_json, progress_bar};
 /// The default finest level: the region's longest side in 256 cells.
 const DEFAULT_DEPTH: u8 = 8;
 
+mod steps;
+
 /// Arguments of `isoforge mesh`.
-#[derive(Args, Debug)]
+#[derive(Args, Clone, Debug)]
 pub struct MeshArgs {
     #[command(flatten)]
     model: ModelArgs,
@@ -95,6 +97,9 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
         .output
         .clone()
         .unwrap_or_else(|| default_output(&args.model.model, format));
+    if let Some(sweep) = args.model.sweep()? {
+        return steps::run(&args, &sweep, format, &output, global);
+    }
 
     let loaded = args.model.load()?;
     let bounds = loaded.bounds;

@@ -66,3 +66,51 @@ fn info_rejects_every_bad_script() {
 fn mesh_rejects_every_bad_script_and_writes_nothing() {
     fails_cleanly("mesh", |out| vec!["-o".into(), out.display().to_string()]);
 }
+
+/// Runs `isoforge info BAD extra..`; the error text, after checking it failed cleanly.
+fn info_error(name: &str, extra: &[&str]) -> String {
+    let path = bad(name).display().to_string();
+    let mut args = vec!["info", path.as_str()];
+    args.extend_from_slice(extra);
+    let out = isoforge(&args);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(1), "{name}: {err}");
+    assert!(!err.contains("panicked"), "{name}: {err}");
+    err
+}
+
+#[test]
+fn a_script_keeping_too_much_memory_is_stopped() {
+    // The limit lowered to 64 MiB, so that the test stops after about 64 strings.
+    let err = info_error("memory_hog.rhai", &["--script-memory", "64"]);
+    assert!(err.contains("memory_hog.rhai:8:"), "{err}");
+    assert!(err.contains("more than 64 MiB of memory"), "{err}");
+}
+
+#[test]
+fn a_script_running_too_long_is_stopped() {
+    let err = info_error("copying_loop.rhai", &["--script-timeout", "1"]);
+    assert!(err.contains("copying_loop.rhai:7:"), "{err}");
+    assert!(err.contains("ran longer than 1 s"), "{err}");
+}
+
+#[test]
+fn a_string_past_the_size_limit_is_refused() {
+    let err = info_error("huge_string.rhai", &[]);
+    assert!(err.contains("huge_string.rhai:3:"), "{err}");
+    assert!(
+        err.contains("a string larger than the limit of 1048576 bytes"),
+        "{err}"
+    );
+}
+
+#[test]
+fn script_limits_must_be_positive() {
+    let model = fixtures().join("classic/heart.rhai").display().to_string();
+    for flag in [["--script-timeout", "0"], ["--script-memory", "0"]] {
+        let out = isoforge(&["info", &model, flag[0], flag[1]]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{flag:?}: {err}");
+        assert!(err.contains(flag[0]), "{flag:?}: {err}");
+    }
+}

@@ -16,6 +16,7 @@ mod slice;
 mod studio;
 mod studio_browser;
 mod studio_process;
+mod sweep;
 mod word;
 
 use std::path::{Path, PathBuf};

@@ -1,0 +1,52 @@
+//! Meshing time for the modern-library fixtures (`fixtures/modern`: hull, metaballs,
+//! function volumes, an imported mesh, a shell) at depths 8 and 9, to read beside the
+//! classic benchmark models of `mesh.rs` (same settings: all cores, the script's bounds).
+//! Quick subset: `cargo bench --bench modern -- d8`.
+
+use std::path::PathBuf;
+
+use divan::Bencher;
+use isoforge_mesh::{MeshSettings, mesh_shape};
+use isoforge_script::load_file;
+
+fn main() {
+    divan::main();
+}
+
+const MODELS: [&str; 7] = [
+    "tetrahedron_hull",
+    "lava_lamp",
+    "ripple_tile",
+    "spiky_ball",
+    "trefoil_tube",
+    "drilled_import",
+    "heart_shell",
+];
+
+fn bench_model(bencher: Bencher, name: &str, depth: u8) {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../fixtures/modern")
+        .join(format!("{name}.rhai"));
+    let model = match load_file(&path, &[]) {
+        Ok(m) => m,
+        Err(e) => panic!("{name}: {e}"),
+    };
+    let Some(bounds) = model.bounds else {
+        panic!("{name}: the fixture declares its bounds")
+    };
+    let settings = MeshSettings::new(bounds, depth);
+    bencher.bench(|| {
+        let mesh = mesh_shape(&model.shape, &settings);
+        divan::black_box(mesh.triangles.len())
+    });
+}
+
+#[divan::bench(args = MODELS, sample_count = 3, sample_size = 1)]
+fn d8(bencher: Bencher, name: &str) {
+    bench_model(bencher, name, 8);
+}
+
+#[divan::bench(args = MODELS, sample_count = 2, sample_size = 1)]
+fn d9(bencher: Bencher, name: &str) {
+    bench_model(bencher, name, 9);
+}
