@@ -17,9 +17,13 @@
 //! # let _ = (model, ring);
 //! ```
 
+pub mod bound;
+pub mod bvh;
 pub mod classic;
 pub mod curve;
 pub mod frame;
+pub mod profile;
+pub mod sweep;
 
 #[cfg(test)]
 mod reference;
