@@ -4,7 +4,8 @@
 //! [`Context`]), folds constants and flattens it into SSA instructions with allocated
 //! registers. Four evaluators run on a tape: [`PointEval`] (f64), [`BatchEval`] (many points
 //! a call), [`IntervalEval`] (rigorous enclosures over a box, recording which side of every
-//! min and max won) and [`GradEval`] (value and partial derivatives). [`Tape::simplify`] drops
+//! min and max won), [`GradEval`] (value and partial derivatives) and [`IntervalGradEval`]
+//! (enclosures of the value and the partial derivatives over a box). [`Tape::simplify`] drops
 //! the branches an interval pass proved irrelevant, so children of an octree cell are
 //! evaluated with a shorter tape.
 //!
@@ -47,6 +48,7 @@ pub use custom::CustomField;
 pub use eval::batch::BatchEval;
 pub use eval::grad::{Grad, GradEval};
 pub use eval::interval::IntervalEval;
+pub use eval::interval_grad::{IntervalGrad, IntervalGradEval};
 pub use eval::point::PointEval;
 pub use inari::Interval;
 pub use op::{BinaryOp, UnaryOp};

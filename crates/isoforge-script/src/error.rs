@@ -102,6 +102,34 @@ pub enum RuntimeCause {
         /// The declared maximum.
         max: f64,
     },
+    /// A modern-library call was given an option (`#{key: ..}`) it does not take.
+    #[error(
+        "{function}: unknown option `{key}`{} ({function} takes: {})",
+        suggestion.as_ref().map(|s| format!(", did you mean `{s}`?")).unwrap_or_default(),
+        if known.is_empty() { "no options".to_string() } else { known.join(", ") }
+    )]
+    UnknownOption {
+        /// The function called.
+        function: String,
+        /// The key given.
+        key: String,
+        /// The keys the function takes.
+        known: Vec<String>,
+        /// The known key nearest to the one given (a typo).
+        suggestion: Option<String>,
+    },
+    /// A modern-library option has a value of the wrong type or out of its range.
+    #[error("{function}: option `{key}` must be {expected}, not {found}")]
+    OptionType {
+        /// The function called.
+        function: String,
+        /// The key.
+        key: String,
+        /// What it must be ("a number", "[x, y, z]", "one of ..").
+        expected: String,
+        /// What was given.
+        found: String,
+    },
     /// Anything else: a library function refused its arguments, a `throw`, rhai's own errors.
     #[error("{0}")]
     Failed(String),

@@ -35,6 +35,7 @@ mod error;
 mod library;
 mod notation;
 mod ops;
+pub mod options;
 mod params;
 mod rhai_errors;
 

@@ -21,7 +21,9 @@ pub mod bound;
 pub mod bvh;
 pub mod classic;
 pub mod curve;
+pub mod evals;
 pub mod frame;
+pub mod modern;
 pub mod profile;
 pub mod sweep;
 

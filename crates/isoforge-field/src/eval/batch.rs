@@ -177,11 +177,11 @@ impl BatchEval {
                 }
                 Op::Custom { k, out, args } => {
                     let f = &tape.customs()[k as usize];
-                    #[allow(clippy::needless_range_loop)] // reads three registers, writes a fourth
-                    for i in 0..len {
-                        let q = args.map(|a| r[a as usize][i]);
-                        r[out as usize][i] = f.value(q);
-                    }
+                    // The node sees the whole block at once (see `CustomField::values`).
+                    let mut values = [0.0; BLOCK];
+                    let [a, b, c] = args.map(|a| &r[a as usize][..len]);
+                    f.values(a, b, c, &mut values[..len]);
+                    r[out as usize] = values;
                 }
             }
         }

@@ -37,7 +37,7 @@ fn unary_fast(op: UnaryOp, a: Interval) -> (Interval, bool) {
 
 /// An operation on one interval: `(enclosure, may be NaN)`.
 #[inline(never)]
-fn unary(op: UnaryOp, a: Interval) -> (Interval, bool) {
+pub(crate) fn unary(op: UnaryOp, a: Interval) -> (Interval, bool) {
     if a.is_empty() {
         return (Interval::ENTIRE, true);
     }
@@ -93,7 +93,7 @@ fn binary_fast(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
 
 /// An operation on two intervals: `(enclosure, may be NaN)`.
 #[inline(never)]
-fn binary(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
+pub(crate) fn binary(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
     if a.is_empty() || b.is_empty() {
         return (Interval::ENTIRE, true);
     }
@@ -135,7 +135,7 @@ fn binary(op: BinaryOp, a: Interval, b: Interval) -> (Interval, bool) {
 
 /// The choice of a min or max given its operands' intervals and NaN bits.
 #[inline(always)]
-fn choose(op: BinaryOp, a: Interval, an: bool, b: Interval, bn: bool) -> Choice {
+pub(crate) fn choose(op: BinaryOp, a: Interval, an: bool, b: Interval, bn: bool) -> Choice {
     if an || bn {
         return Choice::Both;
     }
@@ -261,7 +261,7 @@ impl IntervalEval {
 /// An immediate operand as an interval (NaN immediates are NaN everywhere; infinite ones
 /// become the unbounded sliver next to them, as [`enclose::interval`] does).
 #[inline(always)]
-fn imm_interval(c: f64) -> (Interval, bool) {
+pub(crate) fn imm_interval(c: f64) -> (Interval, bool) {
     if c.is_finite() {
         // A finite point interval is always valid.
         (

@@ -74,6 +74,11 @@ impl CustomField for Paraboloid {
     fn gradient(&self, p: [f64; 3]) -> [f64; 4] {
         [self.value(p), 2.0 * p[0], 2.0 * p[1], -1.0]
     }
+    fn interval_gradient(&self, b: [Interval; 3]) -> [Interval; 3] {
+        let two = Interval::try_from((2.0, 2.0)).expect("point");
+        let minus_one = Interval::try_from((-1.0, -1.0)).expect("point");
+        [two * b[0], two * b[1], minus_one]
+    }
 }
 
 /// The shared instance, so hash-consing sees one custom node.

@@ -1,6 +1,8 @@
 //! proptest laws on random expressions and random boxes.
 
-use isoforge_field::{BatchEval, Choice, GradEval, IntervalEval, PointEval, Tape};
+use isoforge_field::{
+    BatchEval, Choice, GradEval, IntervalEval, IntervalGradEval, PointEval, Tape,
+};
 use proptest::prelude::*;
 
 use crate::common::*;
@@ -24,6 +26,33 @@ proptest! {
         for p in samples(&b, &f) {
             let v = pe.eval(&tape, p);
             prop_assert!(encloses(i, v), "{:?} over {:?}: {:?} misses {} at {:?}", s, b, i, v, p);
+        }
+    }
+
+    /// The interval gradient over a box encloses the value and every partial derivative
+    /// the gradient evaluator gives at points of the box (as values are enclosed: an
+    /// infinite slope by an interval unbounded on its side, NaN only by `ENTIRE`), and its
+    /// value part is the interval evaluator's.
+    #[test]
+    fn interval_gradient_encloses_point_gradients(s in any_shape(), b in any_box(), f in fractions()) {
+        let tape = Tape::new(&s);
+        let ig = IntervalGradEval::new().eval(&tape, intervals(&b));
+        prop_assert_eq!(ig.v, IntervalEval::new().eval(&tape, intervals(&b)));
+        let mut ge = GradEval::new();
+        for p in samples(&b, &f) {
+            let g = ge.eval(&tape, p);
+            prop_assert!(encloses(ig.v, g.v));
+            if g.v.is_nan() {
+                continue;
+            }
+            for k in 0..3 {
+                let d = g.d[k];
+                prop_assert!(encloses(ig.d[k], d), "{:?} over {:?}: d/d{} = {} at {:?} outside {:?}", s, b, k, d, p, ig.d[k]);
+            }
+            let norm = (g.d[0] * g.d[0] + g.d[1] * g.d[1] + g.d[2] * g.d[2]).sqrt();
+            if norm.is_finite() {
+                prop_assert!(ig.slope_floor() <= norm && norm <= ig.slope_bound());
+            }
         }
     }
 

@@ -7,6 +7,7 @@
 mod common;
 mod conformance;
 mod context;
+mod custom;
 mod enclose;
 mod laws;
 mod region;
