@@ -26,6 +26,7 @@ pub mod frame;
 pub mod modern;
 pub mod profile;
 pub mod sweep;
+pub mod texture;
 
 #[cfg(test)]
 mod reference;

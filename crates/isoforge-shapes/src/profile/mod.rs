@@ -119,9 +119,13 @@ impl Outline {
     pub fn area(&self) -> f64 {
         self.rings.iter().map(|r| signed_area(r)).sum()
     }
-    /// The length of the outer ring.
+    /// The length of the outer ring (a circle's exact circumference, not its sampled
+    /// outline's).
     pub fn perimeter(&self) -> f64 {
-        ring_length(self.outer())
+        match self.kind {
+            Kind::Circle { radius, .. } => std::f64::consts::TAU * radius,
+            Kind::Polygon => ring_length(self.outer()),
+        }
     }
     /// The centre and radius when the profile is an exact circle.
     pub fn circle(&self) -> Option<(DVec2, f64)> {

@@ -101,6 +101,12 @@ impl CustomField for PolygonField {
         let (v, g) = self.with_gradient(DVec2::new(p[0], p[1]));
         [v, g.x, g.y, 0.0]
     }
+
+    fn interval_gradient(&self, _b: [Interval; 3]) -> [Interval; 3] {
+        // A distance in the plane: its gradient is a unit vector in x and y.
+        let unit = widened(-1.0, 1.0);
+        [unit, unit, widened(0.0, 0.0)]
+    }
 }
 
 /// The arc length, along its ring, of the boundary point nearest to `p` (from the ring's
@@ -173,6 +179,12 @@ impl CustomField for OutlineParam {
     fn gradient(&self, p: [f64; 3]) -> [f64; 4] {
         let (s, g) = self.at(DVec2::new(p[0], p[1]));
         [s, g.x, g.y, 0.0]
+    }
+
+    fn interval_gradient(&self, _b: [Interval; 3]) -> [Interval; 3] {
+        // The gradient is an edge's unit direction or zero.
+        let unit = widened(-1.0, 1.0);
+        [unit, unit, widened(0.0, 0.0)]
     }
 }
 

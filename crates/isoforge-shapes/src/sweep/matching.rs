@@ -107,11 +107,14 @@ const DISTANCE_BUDGET: usize = 300_000_000;
 /// Shifts searched either side of the direct alignment when the budget is exceeded.
 const DISTANCE_WINDOW: usize = 16;
 
+/// Matched index pairs (small, big), in order around both rings.
+type Pairs = Vec<(usize, usize)>;
+
 /// The cheapest monotone matching of `small` (m points) against `big` (n points), both
 /// closed and starting matched at index 0: returns its cost and the matched index pairs
 /// (every index of both appears, in order). Gives up (returns `None`) once every entry of
 /// a row exceeds `abort`.
-fn dp_match(small: &[DVec2], big: &[DVec2], abort: f64) -> Option<(f64, Vec<(usize, usize)>)> {
+fn dp_match(small: &[DVec2], big: &[DVec2], abort: f64) -> Option<(f64, Pairs)> {
     let (m, n) = (small.len(), big.len());
     let w = n + 1;
     let dist = |i: usize, j: usize| small[i % m].distance(big[j % n]);
@@ -194,7 +197,7 @@ pub fn distance_match(a: &[DVec2], b: &[DVec2], all_shifts: bool) -> (Vec<DVec2>
             .map(|d| (centre + n + d - DISTANCE_WINDOW.min(n)) % n)
             .collect()
     };
-    let mut best: Option<(f64, usize, Vec<(usize, usize)>)> = None;
+    let mut best: Option<(f64, usize, Pairs)> = None;
     for k in shifts {
         let rotated = shifted(big, k);
         let abort = best.as_ref().map_or(f64::INFINITY, |b| b.0);

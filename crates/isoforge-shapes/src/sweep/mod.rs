@@ -217,7 +217,8 @@ pub fn radial() -> Shape {
     (Shape::x().square() + Shape::y().square()).sqrt()
 }
 
-fn check_revolvable(profile: &Profile) -> Result<(), SweepError> {
+/// Checks that a profile to be revolved stays on the +x side of the axis.
+pub(crate) fn check_revolvable(profile: &Profile) -> Result<(), SweepError> {
     let min_x = match profile.outline() {
         Some(o) => o
             .rings()

@@ -15,11 +15,10 @@
 //! Open paths get flat end caps: a short straight extension past each end, cut by the
 //! end's plane, so the caps have the right normal for the mesher.
 
-use std::cell::RefCell;
 use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
-use isoforge_field::{CustomField, Interval, PointEval, Shape, Tape};
+use isoforge_field::{CustomField, Interval, Shape, Tape};
 
 use super::SweepError;
 use super::frames::{FrameOptions, Station, stations};
@@ -190,10 +189,6 @@ pub struct PathField {
     lipschitz: f64,
 }
 
-thread_local! {
-    static PROFILE_EVAL: RefCell<PointEval> = RefCell::new(PointEval::new());
-}
-
 impl PathField {
     fn new(profile: &Profile, stations: &[Station], closed: bool) -> PathField {
         let max_scale = stations.iter().map(|s| s.scale).fold(0.0, f64::max);
@@ -233,10 +228,7 @@ impl PathField {
     }
 
     fn profile_value(&self, q: DVec2) -> f64 {
-        PROFILE_EVAL.with(|ev| match ev.try_borrow_mut() {
-            Ok(mut ev) => ev.eval(&self.profile, [q.x, q.y, 0.0]),
-            Err(_) => PointEval::new().eval(&self.profile, [q.x, q.y, 0.0]),
-        })
+        crate::evals::with_evals(|ev| ev.point.eval(&self.profile, [q.x, q.y, 0.0]))
     }
 
     /// The profile value at `p` in segment `seg`'s plane at fraction `u`.
