@@ -25,6 +25,7 @@ pub mod evals;
 pub mod frame;
 pub mod modern;
 pub mod profile;
+pub mod surface;
 pub mod sweep;
 pub mod texture;
 
