@@ -4,6 +4,7 @@ use isoforge_field::Shape;
 use rhai::module_resolvers::DummyModuleResolver;
 use rhai::{Dynamic, Engine};
 
+use crate::files::ScriptFolder;
 use crate::params::Shared;
 
 /// Operations a script may run. The classic and benchmark models need a few thousand, a
@@ -24,8 +25,9 @@ const MAX_STRING: usize = 1 << 20;
 const MAX_ARRAY: usize = 1 << 20;
 const MAX_MAP: usize = 1 << 16;
 
-/// Builds an engine with the library, limits and no way out of the sandbox.
-pub fn build(shared: &Shared) -> Engine {
+/// Builds an engine with the library, limits and no way out of the sandbox; the only
+/// files it can read are in `folder` (the script's own).
+pub fn build(shared: &Shared, folder: &ScriptFolder) -> Engine {
     let mut engine = Engine::new();
     // Without this rhai runs its own `/` and `^` on numbers and ignores ours (9/4 == 2).
     engine.set_fast_operators(false);
@@ -35,7 +37,7 @@ pub fn build(shared: &Shared) -> Engine {
     engine.set_max_string_size(MAX_STRING);
     engine.set_max_array_size(MAX_ARRAY);
     engine.set_max_map_size(MAX_MAP);
-    // No `import`: a model cannot read other files (import_stl will be the one way).
+    // No `import`: a model reads no other files (only `image(..)` from its own folder).
     engine.set_module_resolver(DummyModuleResolver::new());
     engine.disable_symbol("import");
     engine.disable_symbol("eval");
@@ -48,6 +50,9 @@ pub fn build(shared: &Shared) -> Engine {
     register_coordinates(&mut engine);
     crate::ops::register(&mut engine);
     crate::library::register(&mut engine);
+    crate::sweeps::register(&mut engine);
+    crate::textures::register(&mut engine, folder);
+    crate::surfaces::register(&mut engine);
     crate::params::register(&mut engine, shared);
     engine
 }

@@ -32,12 +32,16 @@ use rhai::Dynamic;
 mod args;
 mod engine;
 mod error;
+mod files;
 mod library;
 mod notation;
 mod ops;
 pub mod options;
 mod params;
 mod rhai_errors;
+mod surfaces;
+mod sweeps;
+mod textures;
 
 pub use engine::{MAX_CALL_LEVELS, MAX_OPERATIONS};
 pub use error::{CallSite, Location, RuntimeCause, ScriptError};
@@ -136,7 +140,7 @@ fn run(path: &Path, source: &str, params: &[(String, f64)]) -> Result<Model, Scr
         overrides: params.to_vec(),
         ..Default::default()
     }));
-    let engine = engine::build(&shared);
+    let engine = engine::build(&shared, &files::ScriptFolder::of_script(path));
     let Some(last_line) = last_code_line(source) else {
         return Err(ScriptError::Empty {
             path: path.to_path_buf(),
