@@ -44,24 +44,37 @@ pub struct Jet {
 /// The Bernstein bases of degree `n` at `u` with their first and second derivatives,
 /// into the first `n + 1` entries of each slice (which hold at least that many).
 fn bernstein<const N: usize>(n: usize, u: f64, b: &mut [f64], d1: &mut [f64], d2: &mut [f64]) {
-    // Bases of rising degree in place, B(k, i) = (1 − u) B(k−1, i) + u B(k−1, i−1),
-    // keeping degrees n−1 and n−2 for the derivatives.
+    // Degree n − 2 in place, B(k, i) = (1 − u) B(k−1, i) + u B(k−1, i−1); then one more
+    // step into `p1` (degree n − 1) and one into `b` (degree n), so nothing is copied.
     let mut p1 = [0.0f64; N];
     let mut p2 = [0.0f64; N];
-    let w = &mut b[..=n];
-    w[0] = 1.0;
-    for k in 1..=n {
-        if n >= 2 && k - 1 == n - 2 {
-            p2[..k].copy_from_slice(&w[..k]);
+    let step = |from: &[f64], to: &mut [f64], k: usize| {
+        // `from` holds degree k − 1 (k entries); `to` gets degree k (k + 1 entries).
+        to[0] = (1.0 - u) * from[0];
+        for i in 1..k {
+            to[i] = (1.0 - u) * from[i] + u * from[i - 1];
         }
-        if k - 1 == n - 1 {
-            p1[..k].copy_from_slice(&w[..k]);
+        to[k] = u * from[k - 1];
+    };
+    match n {
+        0 => b[0] = 1.0,
+        1 => {
+            p1[0] = 1.0;
+            step(&p1, b, 1);
         }
-        w[k] = u * w[k - 1];
-        for i in (1..k).rev() {
-            w[i] = (1.0 - u) * w[i] + u * w[i - 1];
+        _ => {
+            p2[0] = 1.0;
+            for k in 1..=n - 2 {
+                // In place, from the top down, so each entry reads the old one below it.
+                p2[k] = u * p2[k - 1];
+                for i in (1..k).rev() {
+                    p2[i] = (1.0 - u) * p2[i] + u * p2[i - 1];
+                }
+                p2[0] *= 1.0 - u;
+            }
+            step(&p2, &mut p1, n - 1);
+            step(&p1, b, n);
         }
-        w[0] *= 1.0 - u;
     }
     let nf = n as f64;
     for i in 0..=n {
@@ -107,6 +120,11 @@ impl Patch {
         self.s_range = s_range;
         self.t_range = t_range;
         self
+    }
+
+    /// Rows and columns of control points.
+    pub fn size(&self) -> (usize, usize) {
+        (self.rows, self.cols)
     }
 
     /// Control point (i, j).

@@ -202,3 +202,30 @@ fn thick_intervals_enclose_values() {
         }
     }
 }
+
+#[test]
+fn batched_values_match_single_points() {
+    let s = bezier(&lecture_net()).unwrap();
+    for edges in [Edges::Round, Edges::Flat] {
+        let f = ThickSurface::new(&s, 0.3, edges);
+        // Rows of neighbours like the mesher's blocks, plus a far jump inside one group.
+        let n = 70;
+        let (mut xs, mut ys, mut zs) = (Vec::new(), Vec::new(), Vec::new());
+        for k in 0..n {
+            let far = if k == 40 { 5.0 } else { 0.0 };
+            xs.push(-0.5 + k as f64 * 0.06 + far);
+            ys.push(1.3 + (k % 7) as f64 * 0.01);
+            zs.push(0.2 - (k % 3) as f64 * 0.05);
+        }
+        let mut out = vec![0.0; n];
+        f.values(&xs, &ys, &zs, &mut out);
+        for k in 0..n {
+            let one = f.value([xs[k], ys[k], zs[k]]);
+            assert!(
+                (out[k] - one).abs() < 1e-7,
+                "{edges:?} point {k}: {} vs {one}",
+                out[k]
+            );
+        }
+    }
+}

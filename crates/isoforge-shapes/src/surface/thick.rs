@@ -41,6 +41,67 @@ const MAX_SPLITS: usize = 6;
 /// Newton steps on a piece; each roughly doubles the correct digits once close.
 const NEWTON_STEPS: usize = 12;
 
+/// Points handled together by the batch callback: the mesher's blocks come in rows, so a
+/// group of 32 neighbours shares one short list of candidate pieces.
+const GROUP: usize = 32;
+
+impl ThickSurface {
+    /// The field at a group of neighbouring points: one hierarchy query for the group's
+    /// candidate pieces, then per point a Newton search warm-started from the previous
+    /// point's answer, and only the candidates whose oriented box could beat it.
+    fn group_values(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        let pts: Vec<DVec3> = (0..out.len())
+            .map(|i| DVec3::new(xs[i], ys[i], zs[i]))
+            .collect();
+        let group = Box3::around(pts.iter().copied());
+        if !group.min.is_finite() || !group.max.is_finite() {
+            for (o, &p) in out.iter_mut().zip(&pts) {
+                *o = self.field(p);
+            }
+            return;
+        }
+        let centre = group.centre();
+        let Some(first) = self.closest(centre) else {
+            out.fill(f64::INFINITY);
+            return;
+        };
+        // Every point's nearest piece lies within its distance, at most this, of the group.
+        let reach = first.distance + (group.max - group.min).length() * 0.5;
+        // Each candidate with its oriented box's distance from the group's centre: a point
+        // `r` from the centre is at least that less `r` from the piece.
+        let mut candidates = Vec::new();
+        self.bvh.near_box(&group, reach, &mut |i| {
+            candidates.push((i, self.boxes[i].distance(centre)));
+        });
+        let mut warm = first;
+        // Where each piece last answered in this group: its next search starts there.
+        let mut last_uv: Vec<(usize, DVec2)> = Vec::with_capacity(16);
+        for (o, &p) in out.iter_mut().zip(&pts) {
+            let mut best = closest_on(&self.pieces[warm.piece], warm.piece, p, Some(warm.uv));
+            let off = p.distance(centre);
+            for &(i, from_centre) in &candidates {
+                if i == best.piece
+                    || from_centre - off >= best.distance
+                    || self.boxes[i].distance(p) >= best.distance
+                {
+                    continue;
+                }
+                let start = last_uv.iter().find(|(k, _)| *k == i).map(|(_, uv)| *uv);
+                let f = closest_on(&self.pieces[i], i, p, start);
+                match last_uv.iter_mut().find(|(k, _)| *k == i) {
+                    Some(slot) => slot.1 = f.uv,
+                    None => last_uv.push((i, f.uv)),
+                }
+                if f.distance < best.distance {
+                    best = f;
+                }
+            }
+            *o = self.at_foot(p, &best).0;
+            warm = best;
+        }
+    }
+}
+
 /// The nearest point of the surface to a query point.
 #[derive(Copy, Clone, Debug)]
 pub struct Foot {
@@ -56,6 +117,9 @@ pub struct Foot {
     pub dt: DVec3,
     /// The distance.
     pub distance: f64,
+    /// The piece it lies on, and where on it: a warm start for a neighbouring query.
+    piece: usize,
+    uv: DVec2,
 }
 
 /// A box along a piece's own directions (tangents and normal at its centre) holding all
@@ -115,6 +179,10 @@ thread_local! {
 pub struct ThickSurface {
     pieces: Vec<Patch>,
     boxes: Vec<OrientedBox>,
+    /// Per piece, a lower bound of the first-order distance to the surface's edge from
+    /// any foot on it (`None` for a piece on the edge): what bounds a flat slab's field
+    /// from above inside it.
+    edge_room: Vec<Option<f64>>,
     bvh: Bvh,
     half: f64,
     edges: Edges,
@@ -147,9 +215,11 @@ impl ThickSurface {
         }
         let bvh = Bvh::new(pieces.iter().map(Patch::hull_box).collect());
         let boxes = pieces.iter().map(OrientedBox::of).collect();
+        let edge_room = pieces.iter().map(edge_room).collect();
         ThickSurface {
             pieces,
             boxes,
+            edge_room,
             bvh,
             half: 0.5 * thickness,
             edges,
@@ -172,7 +242,7 @@ impl ThickSurface {
             .map(|(_, i)| i)
             && i < self.pieces.len()
         {
-            best = Some(closest_on(&self.pieces[i], p));
+            best = Some(closest_on(&self.pieces[i], i, p, None));
             best_piece = i;
         }
         self.bvh.min_search(p, &mut |i| {
@@ -184,7 +254,7 @@ impl ThickSurface {
             if best.is_some_and(|b| self.boxes[i].distance(p) >= b.distance) {
                 return f64::INFINITY;
             }
-            let f = closest_on(&self.pieces[i], p);
+            let f = closest_on(&self.pieces[i], i, p, None);
             let d = f.distance;
             if best.is_none_or(|b| d < b.distance) {
                 best = Some(f);
@@ -205,9 +275,14 @@ impl ThickSurface {
     /// The field and, where it is known in closed form, its gradient (`None` on the
     /// first-order edge distance inside a flat slab, which is differenced instead).
     fn field_and_gradient(&self, p: DVec3) -> (f64, Option<DVec3>) {
-        let Some(foot) = self.closest(p) else {
-            return (f64::INFINITY, Some(DVec3::ZERO));
-        };
+        match self.closest(p) {
+            Some(foot) => self.at_foot(p, &foot),
+            None => (f64::INFINITY, Some(DVec3::ZERO)),
+        }
+    }
+
+    /// The field at `p` whose closest surface point is `foot`.
+    fn at_foot(&self, p: DVec3, foot: &Foot) -> (f64, Option<DVec3>) {
         let normal = foot.ds.cross(foot.dt).normalize_or_zero();
         let away = p - foot.point;
         let round = foot.distance - self.half;
@@ -257,24 +332,73 @@ impl ThickSurface {
     }
 }
 
+/// A lower bound of the first-order distance to the surface's edge, `min(s, 1 − s)·|∂S/∂s|`
+/// and likewise in t, over a piece that does not touch the edge (`None` if it does).
+///
+/// |∂S/∂u| over the piece lies in the convex hull of its derivative net (the differences
+/// of neighbouring control points, times the degree); its length is at least that hull's
+/// extent along the mean difference direction, the smallest projection onto it.
+fn edge_room(piece: &Patch) -> Option<f64> {
+    let [s0, s1] = piece.s_range;
+    let [t0, t1] = piece.t_range;
+    if s0 <= 0.0 || s1 >= 1.0 || t0 <= 0.0 || t1 >= 1.0 {
+        return None;
+    }
+    let (rows, cols) = piece.size();
+    let speed = |diffs: Vec<DVec3>, degree: usize| -> f64 {
+        let mean = diffs.iter().copied().sum::<DVec3>();
+        let Some(dir) = mean.try_normalize() else {
+            return 0.0;
+        };
+        let least = diffs
+            .iter()
+            .map(|d| d.dot(dir))
+            .fold(f64::INFINITY, f64::min);
+        (least * degree as f64).max(0.0)
+    };
+    let du: Vec<DVec3> = (0..rows - 1)
+        .flat_map(|i| (0..cols).map(move |j| (i, j)))
+        .map(|(i, j)| piece.at(i + 1, j) - piece.at(i, j))
+        .collect();
+    let dv: Vec<DVec3> = (0..rows)
+        .flat_map(|i| (0..cols - 1).map(move |j| (i, j)))
+        .map(|(i, j)| piece.at(i, j + 1) - piece.at(i, j))
+        .collect();
+    // Per unit of the surface's s and t (the piece spans a fraction of each).
+    let vs = speed(du, rows - 1) / (s1 - s0);
+    let vt = speed(dv, cols - 1) / (t1 - t0);
+    Some(
+        (s0 * vs)
+            .min((1.0 - s1) * vs)
+            .min(t0 * vt)
+            .min((1.0 - t1) * vt),
+    )
+}
+
 /// The closest point of one piece to `p`: Newton on |S − p|² from the best of its centre
 /// and corners, kept inside the piece.
-fn closest_on(piece: &Patch, p: DVec3) -> Foot {
-    // Start from the centre or the nearest corner (a patch passes through its corner
-    // control points, so those cost nothing to measure).
-    let mut jet = piece.jet(0.5, 0.5);
-    let mut uv = DVec2::splat(0.5);
-    let mut best = jet.p.distance_squared(p);
-    for (corner, at) in piece.corners() {
-        let d = corner.distance_squared(p);
-        if d < best {
-            best = d;
-            uv = at;
+fn closest_on(piece: &Patch, index: usize, p: DVec3, start: Option<DVec2>) -> Foot {
+    let (mut uv, mut jet) = match start {
+        Some(uv) => (uv, piece.jet(uv.x, uv.y)),
+        None => {
+            // The centre or the nearest corner (a patch passes through its corner
+            // control points, so those cost nothing to measure).
+            let mut jet = piece.jet(0.5, 0.5);
+            let mut uv = DVec2::splat(0.5);
+            let mut best = jet.p.distance_squared(p);
+            for (corner, at) in piece.corners() {
+                let d = corner.distance_squared(p);
+                if d < best {
+                    best = d;
+                    uv = at;
+                }
+            }
+            if uv != DVec2::splat(0.5) {
+                jet = piece.jet(uv.x, uv.y);
+            }
+            (uv, jet)
         }
-    }
-    if uv != DVec2::splat(0.5) {
-        jet = piece.jet(uv.x, uv.y);
-    }
+    };
     for _ in 0..NEWTON_STEPS {
         let r = jet.p - p;
         let g = DVec2::new(jet.du.dot(r), jet.dv.dot(r));
@@ -289,29 +413,47 @@ fn closest_on(piece: &Patch, p: DVec3) -> Foot {
             let (a, b, c) = (jet.du.dot(jet.du), jet.du.dot(jet.dv), jet.dv.dot(jet.dv));
             h = DMat2::from_cols(DVec2::new(a, b), DVec2::new(b, c));
         }
-        let det = h.determinant();
-        if !det.is_finite() || det.abs() < 1e-300 {
-            break;
-        }
-        let step = -(h.inverse() * g);
-        let next = (uv + step).clamp(DVec2::ZERO, DVec2::ONE);
-        let next_jet = piece.jet(next.x, next.y);
-        if next_jet.p.distance_squared(p) > jet.p.distance_squared(p) {
-            // Overshot: take half the step instead, or stop.
-            let half = (uv + step * 0.5).clamp(DVec2::ZERO, DVec2::ONE);
-            let half_jet = piece.jet(half.x, half.y);
-            if half_jet.p.distance_squared(p) >= jet.p.distance_squared(p) {
+        // A coordinate held at its bound by a gradient pointing out of the piece stays
+        // there (the foot lies on that edge); Newton goes on along the other one alone,
+        // since the coupled 2D step would be aimed at a point outside the piece.
+        let held_u = (uv.x <= 0.0 && g.x > 0.0) || (uv.x >= 1.0 && g.x < 0.0);
+        let held_v = (uv.y <= 0.0 && g.y > 0.0) || (uv.y >= 1.0 && g.y < 0.0);
+        let step = match (held_u, held_v) {
+            (false, false) => {
+                let det = h.determinant();
+                if !det.is_finite() || det.abs() < 1e-300 {
+                    break;
+                }
+                -(h.inverse() * g)
+            }
+            (false, true) if h.x_axis.x > 0.0 => DVec2::new(-g.x / h.x_axis.x, 0.0),
+            (true, false) if h.y_axis.y > 0.0 => DVec2::new(0.0, -g.y / h.y_axis.y),
+            _ => break,
+        };
+        // Backtrack until the distance drops: a few halvings, then the step is too small
+        // to matter (1/32 of a Newton step near the foot is below its error).
+        let here = jet.p.distance_squared(p);
+        let mut scale = 1.0;
+        let mut found = None;
+        for _ in 0..6 {
+            let next = (uv + step * scale).clamp(DVec2::ZERO, DVec2::ONE);
+            let next_jet = piece.jet(next.x, next.y);
+            if next_jet.p.distance_squared(p) <= here {
+                found = Some((next, next_jet));
                 break;
             }
-            uv = half;
-            jet = half_jet;
-            continue;
+            scale *= 0.5;
         }
+        let Some((next, next_jet)) = found else {
+            break;
+        };
         let moved = (next - uv).length();
         uv = next;
         jet = next_jet;
-        // A step of 1e-10 of a piece is far below a nanometre on any printable piece.
-        if moved < 1e-10 {
+        // The distance is stationary at the foot, so a foot off by ε (of the piece) moves
+        // the distance by about ε² times the piece's size squared: at ε = 1e-5 that is
+        // 1e-10 of the piece, and Newton's next step would be ~ε² anyway.
+        if moved < 1e-5 {
             break;
         }
     }
@@ -327,6 +469,8 @@ fn closest_on(piece: &Patch, p: DVec3) -> Foot {
         ds: jet.du / ws,
         dt: jet.dv / wt,
         distance: jet.p.distance(p),
+        piece: index,
+        uv,
     }
 }
 
@@ -339,6 +483,18 @@ impl CustomField for ThickSurface {
         self.field(DVec3::from(p))
     }
 
+    fn values(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
+        for start in (0..out.len()).step_by(GROUP) {
+            let end = (start + GROUP).min(out.len());
+            self.group_values(
+                &xs[start..end],
+                &ys[start..end],
+                &zs[start..end],
+                &mut out[start..end],
+            );
+        }
+    }
+
     fn interval(&self, b: [Interval; 3]) -> Interval {
         let Some((c, h)) = finite_box(b) else {
             return Interval::ENTIRE;
@@ -349,14 +505,29 @@ impl CustomField for ThickSurface {
         };
         // Nothing of the surface is nearer the box than the nearest piece's hull box.
         let lo = self.bvh.box_gap(&bx) - self.half;
-        if lo > 0.0 || self.edges == Edges::Flat {
+        if lo > 0.0 {
             return widened(lo, f64::INFINITY);
         }
+        let Some(foot) = self.closest(c) else {
+            return widened(lo, f64::INFINITY);
+        };
         // The distance changes by at most 1 per mm.
-        let hi = self
-            .closest(c)
-            .map_or(f64::INFINITY, |f| f.distance + h.length() - self.half);
-        widened(lo, hi)
+        let reach = foot.distance + h.length();
+        let round_hi = reach - self.half;
+        if self.edges == Edges::Round {
+            return widened(lo, round_hi);
+        }
+        // Flat: every point's foot lies on a piece within `reach` of the box. If none of
+        // them is on the surface's edge, the field there is max(round, −distance to the
+        // edge), and each piece bounds that distance from below.
+        let mut room = f64::INFINITY;
+        self.bvh.near_box(&bx, reach, &mut |i| {
+            room = room.min(self.edge_room[i].unwrap_or(f64::NEG_INFINITY));
+        });
+        if room == f64::NEG_INFINITY {
+            return widened(lo, f64::INFINITY);
+        }
+        widened(lo, round_hi.max(-room))
     }
 
     fn gradient(&self, p: [f64; 3]) -> [f64; 4] {
