@@ -12,6 +12,7 @@ mod outputs;
 mod print;
 mod render;
 mod slice;
+mod sweeps;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
