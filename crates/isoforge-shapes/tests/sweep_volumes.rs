@@ -139,3 +139,43 @@ fn circle_along_a_circle_is_a_torus() {
     let want = 2.0 * PI * PI * 6.0 * 1.5 * 1.5;
     assert_close("torus", volume(&s, [0.0, 0.0, 0.0], 8.0), want);
 }
+
+/// The triangle wave: 0 at whole numbers, 1 halfway between.
+fn tri(x: f64) -> f64 {
+    1.0 - (2.0 * (x - x.floor()) - 1.0).abs()
+}
+
+#[test]
+fn textured_cylinders_have_their_integrated_volumes() {
+    use isoforge_shapes::texture::{Tile, TextureOptions, named, textured_cylinder};
+    // The side stands at R = r − inset + depth·T(u, v); over whole tiles around and up the
+    // volume is π h E[R²], E the mean over one tile.
+    let (r, h) = (10.0, 10.0);
+    let volume_of = |name: &str, depth: f64, inset: f64, mean_t: f64, mean_t2: f64| {
+        let tex = TextureOptions {
+            tile: Tile::Counts([24, 4]),
+            depth,
+            inset,
+            rotate: false,
+        };
+        let s = textured_cylinder(r, &named(name).unwrap(), &LinearSweep::new(h), &tex).unwrap();
+        let base = r - inset;
+        let want = PI * h * (base * base + 2.0 * base * depth * mean_t + depth * depth * mean_t2);
+        assert_close(name, volume(&s, [0.0, 0.0, h / 2.0], r + depth + 0.5), want);
+    };
+    // Ribs, |2 frac(u) − 1|: mean 1/2, mean square 1/3.
+    volume_of("ribs", 1.0, 0.0, 0.5, 1.0 / 3.0);
+    // Diamonds, min(tri(u + v), tri(u − v)): the means by a fine midpoint rule.
+    let n = 1000;
+    let (mut m1, mut m2) = (0.0, 0.0);
+    for i in 0..n {
+        for j in 0..n {
+            let (u, v) = ((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+            let t = tri(u + v).min(tri(u - v));
+            m1 += t;
+            m2 += t * t;
+        }
+    }
+    let cells = (n * n) as f64;
+    volume_of("diamonds", 0.6, 0.3, m1 / cells, m2 / cells);
+}
