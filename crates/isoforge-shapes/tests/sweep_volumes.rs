@@ -147,7 +147,7 @@ fn tri(x: f64) -> f64 {
 
 #[test]
 fn textured_cylinders_have_their_integrated_volumes() {
-    use isoforge_shapes::texture::{Tile, TextureOptions, named, textured_cylinder};
+    use isoforge_shapes::texture::{TextureOptions, Tile, named, textured_cylinder};
     // The side stands at R = r − inset + depth·T(u, v); over whole tiles around and up the
     // volume is π h E[R²], E the mean over one tile.
     let (r, h) = (10.0, 10.0);
