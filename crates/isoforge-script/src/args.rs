@@ -42,6 +42,10 @@ pub fn type_name(d: &Dynamic) -> &'static str {
         "an object map"
     } else if d.is_fnptr() {
         "a function"
+    } else if d.is::<isoforge_shapes::profile::Profile>() {
+        "a 2D profile (sweep it into a solid: linear_sweep, revolve, ...)"
+    } else if d.is::<isoforge_shapes::texture::Texture>() {
+        "a texture"
     } else {
         "a value of another kind"
     }

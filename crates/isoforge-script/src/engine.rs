@@ -11,6 +11,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::facts::SharedFacts;
+use crate::files::ScriptFolder;
 use crate::import::Imports;
 use crate::params::Shared;
 use crate::{RuntimeCause, ScriptLimits};
@@ -43,7 +44,6 @@ pub const MAX_MAP: usize = 1 << 16;
 /// per 16 operations is under 2% of the cheapest loop's time.
 const CHECK_EVERY: u64 = 16;
 
-/// Builds an engine with the library, limits and no way out of the sandbox.
 /// Whether a script's `print()` and `debug()` reach stderr (see [`echo_prints`]).
 static ECHO_PRINTS: AtomicBool = AtomicBool::new(true);
 
@@ -53,11 +53,14 @@ pub fn echo_prints(on: bool) {
     ECHO_PRINTS.store(on, Ordering::Relaxed);
 }
 
+/// Builds an engine with the library, limits and no way out of the sandbox; the only
+/// files it can read are in `folder` (the script's own) and the meshes `import_stl` fences.
 pub fn build(
     shared: &Shared,
     facts: &SharedFacts,
     imports: &Arc<Imports>,
     limits: &ScriptLimits,
+    folder: &ScriptFolder,
 ) -> Engine {
     let mut engine = Engine::new();
     // Without this rhai runs its own `/` and `^` on numbers and ignores ours (9/4 == 2).
@@ -69,7 +72,8 @@ pub fn build(
     engine.set_max_array_size(MAX_ARRAY);
     engine.set_max_map_size(MAX_MAP);
     watch(&mut engine, limits);
-    // No `import`: a model cannot read other files (import_stl is the one way).
+    // No `import`: a model reads no other files (only `image(..)` from its own folder and
+    // meshes through `import_stl`).
     engine.set_module_resolver(DummyModuleResolver::new());
     engine.disable_symbol("import");
     engine.disable_symbol("eval");
@@ -93,6 +97,9 @@ pub fn build(
     crate::modern::register(&mut engine, facts);
     crate::volumes::register(&mut engine, facts);
     crate::import::register(&mut engine, imports, facts);
+    crate::sweeps::register(&mut engine);
+    crate::textures::register(&mut engine, folder);
+    crate::surfaces::register(&mut engine);
     crate::params::register(&mut engine, shared);
     engine
 }

@@ -33,6 +33,7 @@ mod args;
 mod engine;
 mod error;
 mod facts;
+mod files;
 mod import;
 mod library;
 mod modern;
@@ -41,6 +42,9 @@ mod ops;
 pub mod options;
 mod params;
 mod rhai_errors;
+mod surfaces;
+mod sweeps;
+mod textures;
 mod volumes;
 
 pub use engine::{MAX_ARRAY, MAX_CALL_LEVELS, MAX_MAP, MAX_OPERATIONS, MAX_STRING, echo_prints};
@@ -216,7 +220,13 @@ fn run(
     }));
     let facts = facts::SharedFacts::default();
     let imports = import::Imports::new(path);
-    let engine = engine::build(&shared, &facts, &imports, limits);
+    let engine = engine::build(
+        &shared,
+        &facts,
+        &imports,
+        limits,
+        &files::ScriptFolder::of_script(path),
+    );
     let Some(last_line) = last_code_line(source) else {
         return Err(ScriptError::Empty {
             path: path.to_path_buf(),

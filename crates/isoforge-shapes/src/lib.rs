@@ -17,6 +17,8 @@
 //! # let _ = (model, ring);
 //! ```
 
+pub mod bound;
+pub mod bvh;
 pub mod classic;
 pub mod curve;
 pub mod evals;
@@ -27,6 +29,10 @@ pub mod mesh_field;
 pub mod metaballs;
 pub mod modern;
 pub mod probe;
+pub mod profile;
+pub mod surface;
+pub mod sweep;
+pub mod texture;
 pub mod tube;
 
 #[cfg(test)]

@@ -17,6 +17,7 @@ mod studio;
 mod studio_browser;
 mod studio_process;
 mod sweep;
+mod sweeps;
 mod word;
 
 use std::path::{Path, PathBuf};

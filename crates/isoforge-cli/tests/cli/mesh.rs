@@ -12,7 +12,7 @@ fn s(p: &Path) -> &str {
 
 /// Meshes a model to `out` with extra arguments, expects success, checks the file and the
 /// JSON figures; returns the JSON.
-fn mesh_ok(model: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+pub(crate) fn mesh_ok(model: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
     let mut args = vec!["mesh", s(model), "-o", s(out), "--json"];
     args.extend_from_slice(extra);
     let run = isoforge(&args);
@@ -44,7 +44,7 @@ fn mesh_ok(model: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
     json
 }
 
-fn models(dir: &str) -> Vec<PathBuf> {
+pub(crate) fn models(dir: &str) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(fixtures().join(dir))
         .expect("fixtures folder")
         .filter_map(|e| e.ok().map(|e| e.path()))
