@@ -25,9 +25,14 @@ mod check;
 mod dc;
 pub mod io;
 mod mesh;
+pub mod sink;
 pub mod samples;
 
 pub use check::{MeshReport, check};
-pub use dc::{MAX_DEPTH, MeshError, MeshSettings, Progress, mesh_shape, try_mesh_shape};
+pub use dc::{
+    DEFAULT_TOLERANCE_CELLS, MAX_DEPTH, MeshError, MeshSettings, Progress, mesh_shape,
+    mesh_shape_into, try_mesh_shape,
+};
+pub use sink::{MeshSink, Tally};
 pub use io::{MeshFormat, MeshIoError, read_mesh, write_mesh};
 pub use mesh::Mesh;
