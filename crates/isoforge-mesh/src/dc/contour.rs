@@ -266,7 +266,11 @@ pub fn triangulate(
         4 => {
             let d02 = dist2(v[0].1, v[2].1);
             let d13 = dist2(v[1].1, v[3].1);
-            let (p, q, r, s) = if d02 <= d13 { (0, 1, 2, 3) } else { (1, 2, 3, 0) };
+            let (p, q, r, s) = if d02 <= d13 {
+                (0, 1, 2, 3)
+            } else {
+                (1, 2, 3, 0)
+            };
             out.push(([v[p].0, v[q].0, v[r].0], [v[p].1, v[q].1, v[r].1]));
             out.push(([v[p].0, v[r].0, v[s].0], [v[p].1, v[r].1, v[s].1]));
         }

@@ -154,6 +154,7 @@ pub struct LeafScratch {
     /// Per surface cell (in `surface` order), the block-local index of its leaf's first
     /// vertex and whether the leaf is the cell itself.
     leaf_of: Vec<(u32, bool)>,
+    leaf_at: Vec<u32>,
     qefs: [Qef; 4],
 }
 
@@ -291,7 +292,9 @@ pub fn build<S: Sampler>(
             at[1] + (start >> 1 & 1),
             at[2] + (start >> 2 & 1),
         );
-        input.crossings.get(input.edge_slot[(e / 4) * n + ci] as usize)
+        input
+            .crossings
+            .get(input.edge_slot[(e / 4) * n + ci] as usize)
     };
     for (cell, &(vert, finest)) in sc.surface.iter().zip(sc.leaf_of.iter()) {
         let case = &CASES[cell.signs as usize];
@@ -327,10 +330,25 @@ pub fn build<S: Sampler>(
     }
     out.cells.sort_unstable_by_key(|c| c.cell);
 
+    // Edges inside a leaf, or inside a face between two leaves of this block, have no
+    // polygon: leave them out now, while the block's leaves are at hand.
+    sc.leaf_at.clear();
+    sc.leaf_at.resize(b * b * b, NO_VERT);
+    for c in &out.cells {
+        // A finest cell is a leaf of its own: give it an id no other cell has.
+        sc.leaf_at[c.cell as usize] = if c.finest {
+            CANDIDATE - 1 - u32::from(c.cell)
+        } else {
+            c.vert
+        };
+    }
     for (x, edge) in input.crossings.iter().zip(input.edges) {
         let c = edge.corner as usize;
         let at = [c % s, (c / s) % s, c / (s * s)];
         if at.iter().all(|&v| v < b) {
+            if inner_edge(&sc.leaf_at, b, at, edge.axis as usize) {
+                continue;
+            }
             out.owned.push(OwnedEdge {
                 axis: edge.axis,
                 at: at.map(|v| v as u8),
@@ -339,6 +357,26 @@ pub fn build<S: Sampler>(
             });
         }
     }
+}
+
+/// True when the four cells around the edge along `axis` from local corner `at` all lie in
+/// this block and in fewer than three leaves (`leaf_at` holds a leaf id per cell), so the
+/// edge is no leaf's edge.
+fn inner_edge(leaf_at: &[u32], b: usize, at: [usize; 3], axis: usize) -> bool {
+    let (ab, ac) = super::cell::other_axes(axis);
+    if at[ab] == 0 || at[ac] == 0 {
+        return false;
+    }
+    let id = |db: usize, dc: usize| {
+        let mut l = at;
+        l[ab] -= db;
+        l[ac] -= dc;
+        leaf_at[l[0] + b * (l[1] + b * l[2])]
+    };
+    // Around the edge in order: the leaf changes at most twice when there are two leaves.
+    let ids = [id(1, 1), id(0, 1), id(0, 0), id(1, 0)];
+    let changes = (0..4).filter(|&q| ids[q] != ids[(q + 3) % 4]).count();
+    changes < 3
 }
 
 /// The bottom-up merge over one block.
@@ -531,7 +569,11 @@ impl<S: Sampler> Merger<'_, '_, S> {
         for k in 0..3 {
             for j in 0..3 {
                 for i in 0..3 {
-                    let l = [lo_cell[0] + i * half, lo_cell[1] + j * half, lo_cell[2] + k * half];
+                    let l = [
+                        lo_cell[0] + i * half,
+                        lo_cell[1] + j * half,
+                        lo_cell[2] + k * half,
+                    ];
                     if self.input.signs[corner_index(s, l[0], l[1], l[2])] == 1 {
                         signs27 |= 1 << (i + 3 * j + 9 * k);
                     }

@@ -90,13 +90,8 @@ impl AboveBlocks {
     pub fn add_block(&mut self, coords: [i64; 3], candidate: Option<Candidate>, surface: bool) {
         let top = self.top();
         if let Some(leaf) = candidate {
-            self.nodes.insert(
-                (top, coords),
-                NodeState::Merged {
-                    leaf,
-                    id: NO_VERT,
-                },
-            );
+            self.nodes
+                .insert((top, coords), NodeState::Merged { leaf, id: NO_VERT });
             if top > 0 {
                 let parent = (top - 1, coords.map(|c| c >> 1));
                 if !self.nodes.contains_key(&parent) {
@@ -156,13 +151,8 @@ impl AboveBlocks {
         }
         match self.try_merge(key, sampler, ev) {
             Some(leaf) => {
-                self.nodes.insert(
-                    key,
-                    NodeState::Merged {
-                        leaf,
-                        id: NO_VERT,
-                    },
-                );
+                self.nodes
+                    .insert(key, NodeState::Merged { leaf, id: NO_VERT });
                 if key.0 > 0 {
                     let parent = (key.0 - 1, key.1.map(|c| c >> 1));
                     if !self.nodes.contains_key(&parent) {

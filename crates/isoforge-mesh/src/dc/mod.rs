@@ -162,7 +162,9 @@ pub enum MeshError {
     #[error("meshing was cancelled")]
     Cancelled,
     /// More vertices than 32-bit indices can name.
-    #[error("the mesh has more than 4,294,967,295 vertices; use a coarser --depth or a larger --tolerance")]
+    #[error(
+        "the mesh has more than 4,294,967,295 vertices; use a coarser --depth or a larger --tolerance"
+    )]
     TooManyVertices,
     /// The sink could not take the output.
     #[error("cannot write the mesh: {0}")]
@@ -284,7 +286,13 @@ pub(crate) fn mesh_sampler_blocks<S: Sampler>(
     block_shift: u32,
 ) -> Mesh {
     let mut mesh = Mesh::default();
-    if let Err(e) = stream::run(sampler, settings, settings.merging(), block_shift, &mut mesh) {
+    if let Err(e) = stream::run(
+        sampler,
+        settings,
+        settings.merging(),
+        block_shift,
+        &mut mesh,
+    ) {
         panic!("meshing failed: {e}");
     }
     mesh

@@ -64,11 +64,6 @@ impl Qef {
         *self = Qef::new(origin);
     }
 
-    /// The number of planes.
-    pub fn count(&self) -> u32 {
-        self.count
-    }
-
     /// Adds the plane through `p` with unit normal `n`.
     pub fn add(&mut self, p: DVec3, n: DVec3) {
         let q = p - self.origin;
@@ -121,6 +116,7 @@ impl Qef {
 
     /// The minimizer over all space (truncated, around the mass point); the mass point when
     /// nothing better is defined.
+    #[cfg(test)]
     pub fn solve(&self) -> DVec3 {
         if self.count == 0 {
             return self.origin;
@@ -356,9 +352,15 @@ mod tests {
             q.add(line(t) - n2.cross(d) * s, n2);
         }
         let free = q.solve();
-        assert!(free.min_element() < 0.0 || free.max_element() > 1.0, "{free}");
+        assert!(
+            free.min_element() < 0.0 || free.max_element() > 1.0,
+            "{free}"
+        );
         let x = q.solve_in(DVec3::ZERO, DVec3::ONE);
-        assert!(x.cmpge(DVec3::ZERO).all() && x.cmple(DVec3::ONE).all(), "{x}");
+        assert!(
+            x.cmpge(DVec3::ZERO).all() && x.cmple(DVec3::ONE).all(),
+            "{x}"
+        );
         assert!(q.error(x) < 1e-12, "{x}: error {}", q.error(x));
     }
 

@@ -195,9 +195,9 @@ pub fn run<S: Sampler>(
                     |d| {
                         let nc = [0, 1, 2].map(|i| c[i] + d[i]);
                         match tree.class(nc) {
-                            Class::Block(i) => records[i as usize]
-                                .as_ref()
-                                .map(|r| (i, nc, &r.out)),
+                            Class::Block(i) => {
+                                records[i as usize].as_ref().map(|r| (i, nc, &r.out))
+                            }
                             _ => None,
                         }
                     },
