@@ -472,8 +472,8 @@ impl<S: Sampler> Merger<'_, '_, S> {
         let grid = self.input.grid;
         let lo = DVec3::from(grid.corner([0, 1, 2].map(|a| self.base[a] + lo_cell[a] as i64)));
         let size = grid.cell * f64::from(1u32 << level);
-        let inset = grid.cell * INSET;
-        (lo + inset, lo + size - inset)
+        let (lo, hi) = grid.vertex_box(lo.to_array(), size, grid.cell * INSET);
+        (DVec3::from(lo), DVec3::from(hi))
     }
 
     fn push_vertex(&mut self, v: DVec3) -> u32 {

@@ -220,7 +220,8 @@ impl AboveBlocks {
         for leaf in children.iter().flatten() {
             qef.merge(&leaf.qef);
         }
-        let x = qef.solve_in(lo + inset, lo + size - inset);
+        let (vlo, vhi) = grid.vertex_box(lo.to_array(), size, inset);
+        let x = qef.solve_in(DVec3::from(vlo), DVec3::from(vhi));
         for leaf in children.iter().flatten() {
             if leaf.qef.error(x).sqrt() > self.merging.plane {
                 return None;
@@ -297,11 +298,5 @@ impl AboveBlocks {
                 Some(NodeState::Pending) | None => return Resolved::Waiting,
             }
         }
-    }
-
-    /// Nodes held (for tests of the pruning).
-    #[cfg(test)]
-    pub fn len(&self) -> usize {
-        self.nodes.len()
     }
 }
