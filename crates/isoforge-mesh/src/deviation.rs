@@ -72,10 +72,11 @@ pub fn deviation(mesh: &Mesh, field: &ClippedField) -> Deviation {
             .map(|p| p.to_array())
         })
         .collect();
-    let found: Vec<(f64, bool)> = points
+    let mut found: Vec<(f64, bool)> = points
         .par_chunks(CHUNK)
         .flat_map_iter(|chunk| distances(field, chunk))
         .collect();
+    refine_largest(field, &points, &mut found);
     // Degree-3 rule on a triangle: corners 3/60, edge middles 8/60, centroid 27/60.
     const WEIGHTS: [f64; 7] = [
         3.0 / 60.0,
@@ -109,6 +110,113 @@ pub fn deviation(mesh: &Mesh, field: &ClippedField) -> Deviation {
     }
     out.mean = if area > 0.0 { weighted / area } else { 0.0 };
     out
+}
+
+/// Directions searched around the points with the largest distances.
+const DIRECTIONS: usize = 96;
+/// Steps along each direction, out to the distance known so far.
+const STEPS: usize = 12;
+/// At most this many points are searched around (the search is about a thousand
+/// evaluations a point).
+const REFINE_LIMIT: usize = 50_000;
+
+/// Tightens the largest distances. The gradient line is not the shortest way to the
+/// surface near a crease (two surfaces meeting at an angle): a point just inside a sharp
+/// edge looks along one surface's gradient and misses the other surface beside it. Every
+/// distance found is an upper bound (a point of the surface that far away was found), so
+/// the points are taken largest first and searched around in many directions for a nearer
+/// sign change; once the largest distance left is one already searched, it is the
+/// maximum.
+fn refine_largest(field: &ClippedField, points: &[[f64; 3]], found: &mut [(f64, bool)]) {
+    use std::cmp::Ordering;
+    use std::collections::BinaryHeap;
+    #[derive(PartialEq)]
+    struct Item(f64, usize, bool);
+    impl Eq for Item {}
+    impl PartialOrd for Item {
+        fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+            Some(self.cmp(other))
+        }
+    }
+    impl Ord for Item {
+        fn cmp(&self, other: &Self) -> Ordering {
+            self.0.total_cmp(&other.0)
+        }
+    }
+    // Directions spread evenly over the sphere (a Fibonacci lattice).
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let dirs: Vec<DVec3> = (0..DIRECTIONS)
+        .map(|i| {
+            let z = 1.0 - (2 * i + 1) as f64 / DIRECTIONS as f64;
+            let r = (1.0 - z * z).sqrt();
+            let a = golden * i as f64;
+            DVec3::new(r * a.cos(), r * a.sin(), z)
+        })
+        .collect();
+    let mut heap: BinaryHeap<Item> = found
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| d.0 > 0.0 && d.0.is_finite())
+        .map(|(i, d)| Item(d.0, i, false))
+        .collect();
+    let mut batch = BatchEval::new();
+    let (mut xs, mut ys, mut zs, mut f) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut searched = 0;
+    while let Some(Item(d, i, done)) = heap.pop() {
+        if done || searched == REFINE_LIMIT {
+            break;
+        }
+        searched += 1;
+        let p = DVec3::from(points[i]);
+        let mut v = [0.0];
+        field.batch(&mut batch, &[p.x], &[p.y], &[p.z], &mut v);
+        let inside = v[0] < 0.0;
+        let mut sample = |qs: &mut dyn Iterator<Item = DVec3>, f: &mut Vec<f64>| {
+            xs.clear();
+            ys.clear();
+            zs.clear();
+            for q in qs {
+                xs.push(q.x);
+                ys.push(q.y);
+                zs.push(q.z);
+            }
+            f.clear();
+            f.resize(xs.len(), 0.0);
+            field.batch(&mut batch, &xs, &ys, &zs, f);
+        };
+        sample(
+            &mut dirs
+                .iter()
+                .flat_map(|&u| (1..=STEPS).map(move |k| p + u * (d * k as f64 / STEPS as f64))),
+            &mut f,
+        );
+        // Per direction, the first step past a sign change: a bracket to bisect.
+        let mut brackets: Vec<(DVec3, f64, f64)> = Vec::new();
+        for (j, &u) in dirs.iter().enumerate() {
+            if let Some(k) = (0..STEPS).find(|&k| (f[j * STEPS + k] < 0.0) != inside) {
+                let step = d / STEPS as f64;
+                brackets.push((u, step * k as f64, step * (k + 1) as f64));
+            }
+        }
+        for _ in 0..BISECTIONS / 2 {
+            let mids: Vec<DVec3> = brackets
+                .iter()
+                .map(|&(u, lo, hi)| p + u * (0.5 * (lo + hi)))
+                .collect();
+            sample(&mut mids.into_iter(), &mut f);
+            for (b, &v) in brackets.iter_mut().zip(f.iter()) {
+                let mid = 0.5 * (b.1 + b.2);
+                if (v < 0.0) != inside {
+                    b.2 = mid;
+                } else {
+                    b.1 = mid;
+                }
+            }
+        }
+        let nearer = brackets.iter().map(|b| b.2).fold(d, f64::min);
+        found[i] = (nearer, found[i].1 && nearer >= d);
+        heap.push(Item(nearer, i, true));
+    }
 }
 
 /// The distance to the surface of each point, and whether it is the first-order estimate.
@@ -224,6 +332,26 @@ mod tests {
         let mesh = samples::cuboid([-1.0; 3], [1.0; 3]);
         let d = deviation(&mesh, &ClippedField::new(&cube, region));
         assert!(d.max < 1e-6, "{d:?}");
+    }
+
+    #[test]
+    fn near_a_crease_the_nearer_surface_counts() {
+        // max(x − 1, 10 (y − 1)): inside, near the edge x = y = 1. At (0.95, 0.99, 0) the
+        // x branch is the larger (−0.05 against −0.1), so its gradient points along x, 0.05
+        // to its face; but the face y = 1 is only 0.01 away.
+        let (x, y) = (Shape::x(), Shape::y());
+        let wedge = (x - 1.0).max(&((y - 1.0) * 10.0));
+        let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
+        let mesh = Mesh {
+            vertices: vec![
+                [0.95, 0.99, 0.0],
+                [0.9501, 0.99, 0.0],
+                [0.95, 0.9901, 0.0001],
+            ],
+            triangles: vec![[0, 1, 2]],
+        };
+        let d = deviation(&mesh, &ClippedField::new(&wedge, region));
+        assert!((d.max - 0.01).abs() < 2e-4, "{d:?}");
     }
 
     #[test]
