@@ -237,7 +237,7 @@ fn distances(field: &ClippedField, points: &[[f64; 3]]) -> Vec<(f64, bool)> {
         if g.v == 0.0 {
             continue;
         }
-        if !g.v.is_finite() || !(slope > 0.0) || !slope.is_finite() {
+        if !g.v.is_finite() || slope.is_nan() || slope <= 0.0 || !slope.is_finite() {
             // No direction to search in: report what can be said.
             out[i] = (
                 if g.v.is_finite() {

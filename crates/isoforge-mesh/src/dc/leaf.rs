@@ -605,7 +605,7 @@ impl<S: Sampler> Merger<'_, '_, S> {
         let g = self.sampler.grad(self.ev, self.local, x.to_array());
         let slope = DVec3::new(g[1], g[2], g[3]).length();
         let distance = g[0].abs() / slope;
-        if !(distance <= self.input.merging.surface) {
+        if distance.is_nan() || distance > self.input.merging.surface {
             return None;
         }
         Some(Node::Leaf {

@@ -16,6 +16,7 @@
 //! summed squared distances.
 
 use std::collections::HashMap;
+use std::collections::hash_map::Entry;
 
 use glam::DVec3;
 
@@ -94,8 +95,8 @@ impl AboveBlocks {
                 .insert((top, coords), NodeState::Merged { leaf, id: NO_VERT });
             if top > 0 {
                 let parent = (top - 1, coords.map(|c| c >> 1));
-                if !self.nodes.contains_key(&parent) {
-                    self.nodes.insert(parent, NodeState::Pending);
+                if let Entry::Vacant(slot) = self.nodes.entry(parent) {
+                    slot.insert(NodeState::Pending);
                     self.pending.push(parent);
                 }
             }
@@ -155,8 +156,8 @@ impl AboveBlocks {
                     .insert(key, NodeState::Merged { leaf, id: NO_VERT });
                 if key.0 > 0 {
                     let parent = (key.0 - 1, key.1.map(|c| c >> 1));
-                    if !self.nodes.contains_key(&parent) {
-                        self.nodes.insert(parent, NodeState::Pending);
+                    if let Entry::Vacant(slot) = self.nodes.entry(parent) {
+                        slot.insert(NodeState::Pending);
                         self.pending.push(parent);
                     }
                 }
@@ -229,7 +230,8 @@ impl AboveBlocks {
         }
         let g = sampler.grad(ev, &sampler.root(), x.to_array());
         let slope = DVec3::new(g[1], g[2], g[3]).length();
-        if !(g[0].abs() / slope <= self.merging.surface) {
+        let distance = g[0].abs() / slope;
+        if distance.is_nan() || distance > self.merging.surface {
             return None;
         }
         Some(Candidate {

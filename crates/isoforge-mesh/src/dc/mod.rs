@@ -121,7 +121,7 @@ impl MeshSettings {
     /// How far cells may merge under the tolerance.
     fn merging(&self) -> Merging {
         let t = self.effective_tolerance();
-        if !(t > 0.0) || !t.is_finite() && t != f64::INFINITY {
+        if t.is_nan() || t <= 0.0 {
             return Merging::OFF;
         }
         Merging {
@@ -182,7 +182,7 @@ pub enum MeshError {
 pub fn mesh_shape(shape: &Shape, settings: &MeshSettings) -> Mesh {
     let mut s = settings.clone();
     s.depth = s.depth.min(MAX_DEPTH);
-    if s.tolerance.is_some_and(|t| !(t >= 0.0)) {
+    if s.tolerance.is_some_and(|t| t.is_nan() || t < 0.0) {
         s.tolerance = None;
     }
     s.cancel = None;
@@ -223,7 +223,7 @@ pub fn mesh_shape_into(
         });
     }
     if let Some(t) = settings.tolerance
-        && !(t >= 0.0)
+        && (t.is_nan() || t < 0.0)
     {
         return Err(MeshError::BadTolerance { tolerance: t });
     }

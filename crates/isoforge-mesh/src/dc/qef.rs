@@ -186,9 +186,9 @@ impl Qef {
         for (i, f) in fixed.iter().enumerate() {
             if f.is_some() {
                 r[i] = 0.0;
-                for j in 0..3 {
-                    a[i][j] = 0.0;
-                    a[j][i] = 0.0;
+                a[i] = [0.0; 3];
+                for row in a.iter_mut() {
+                    row[i] = 0.0;
                 }
             }
         }

@@ -177,8 +177,8 @@ fn face_has_no_loop(signs: u32, n: usize, w: usize) -> bool {
     }
     // A component with no unit edge on the face's rim is a closed loop.
     let mut reaches_rim = [false; 12];
-    for e in 0..12 {
-        if used[e] && on_rim(e) {
+    for (e, &u) in used.iter().enumerate() {
+        if u && on_rim(e) {
             let r = sets.find(e);
             reaches_rim[r] = true;
         }
@@ -350,7 +350,7 @@ mod tests {
         // Only the centre inside: a bubble the parent cannot see.
         assert!(!collapsible(1 << 13));
         // Only a face centre inside.
-        assert!(!collapsible(1 << (1 + 3 + 0)));
+        assert!(!collapsible(1 << (1 + 3)));
     }
 
     #[test]
