@@ -2,12 +2,22 @@
 //! model at depth 8 over [-1, 1]³: the figures compared with fidget (the models are in
 //! `fixtures/bench`; docs/contributing.md says how to run and compare). Quick subset:
 //! `cargo bench --bench mesh -- d8`.
+//!
+//! The mesh streams into a counting sink, as `isoforge mesh` streams it into a file, so
+//! the memory figures are the mesher's own: divan's allocation profiler reports the most
+//! bytes held at once (per thread: the calling thread's share; whole-process peaks, with
+//! fidget's beside them, come from `tools/mesh-vs-fidget.sh`). Triangles are the items
+//! counter, shown next to the time as a rate.
 
 use std::path::PathBuf;
 
-use divan::Bencher;
+use divan::counter::ItemsCount;
+use divan::{AllocProfiler, Bencher};
 use isoforge_field::Bounds;
-use isoforge_mesh::{MeshSettings, mesh_shape};
+use isoforge_mesh::{MeshSettings, Tally, mesh_shape_into};
+
+#[global_allocator]
+static ALLOC: AllocProfiler = AllocProfiler::system();
 use isoforge_script::{Model, load_file};
 
 fn main() {
@@ -38,10 +48,17 @@ fn load(rel: &str) -> Model {
 
 fn run(bencher: Bencher, model: &Model, bounds: Bounds, depth: u8) {
     let settings = MeshSettings::new(bounds, depth);
-    bencher.bench(|| {
-        let mesh = mesh_shape(&model.shape, &settings);
-        divan::black_box(mesh.triangles.len())
-    });
+    let mesh = |settings: &MeshSettings| {
+        let mut tally = Tally::around([0.0; 3]);
+        match mesh_shape_into(&model.shape, settings, &mut tally) {
+            Ok(()) => tally.triangles,
+            Err(e) => panic!("meshing failed: {e}"),
+        }
+    };
+    let triangles = mesh(&settings);
+    bencher
+        .counter(ItemsCount::new(triangles as usize))
+        .bench(|| divan::black_box(mesh(&settings)));
 }
 
 fn bench_model(bencher: Bencher, name: &str, depth: u8) {

@@ -13,6 +13,9 @@ use glam::DVec3;
 
 use crate::mesh::Mesh;
 
+mod stream;
+pub use stream::{StreamCheck, StreamReport};
+
 /// What the checker found.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshReport {

@@ -23,11 +23,18 @@
 
 mod check;
 mod dc;
+mod deviation;
 pub mod io;
 mod mesh;
 pub mod samples;
+pub mod sink;
 
-pub use check::{MeshReport, check};
-pub use dc::{MAX_DEPTH, MeshError, MeshSettings, Progress, mesh_shape, try_mesh_shape};
+pub use check::{MeshReport, StreamCheck, StreamReport, check};
+pub use dc::{
+    DEFAULT_TOLERANCE_CELLS, MAX_DEPTH, MeshError, MeshSettings, Progress, mesh_shape,
+    mesh_shape_into, try_mesh_shape,
+};
+pub use deviation::{Deviation, deviation};
 pub use io::{MeshFormat, MeshIoError, read_mesh, write_mesh};
 pub use mesh::Mesh;
+pub use sink::{MeshSink, Tally};

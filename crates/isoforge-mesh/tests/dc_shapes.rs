@@ -25,7 +25,13 @@ fn cube(lo: f64, hi: f64) -> Bounds {
 /// surface in its region (the random CSG cases make sure of it), so an empty mesh is a
 /// failure, not a pass.
 fn mesh_ok(shape: &Shape, bounds: Bounds, depth: u8, what: &str) -> (Mesh, f64) {
-    let mesh = mesh_shape(shape, &MeshSettings::new(bounds, depth));
+    mesh_ok_with(shape, &MeshSettings::new(bounds, depth), what)
+}
+
+/// [`mesh_ok`] with any settings.
+fn mesh_ok_with(shape: &Shape, settings: &MeshSettings, what: &str) -> (Mesh, f64) {
+    let (bounds, depth) = (settings.bounds, settings.depth);
+    let mesh = mesh_shape(shape, settings);
     assert!(
         !mesh.triangles.is_empty(),
         "{what} depth {depth}: no triangles, but the shape has surface in its region"
@@ -43,10 +49,11 @@ fn mesh_ok(shape: &Shape, bounds: Bounds, depth: u8, what: &str) -> (Mesh, f64) 
             seen.insert(v.map(f32::to_bits)),
             "{what}: two vertices at {v:?}"
         );
+        let slack = 1e-4;
         for a in 0..3 {
             let (lo, hi) = (bounds.min[a] as f32, bounds.max[a] as f32);
             assert!(
-                v[a] >= lo - 1e-4 && v[a] <= hi + 1e-4,
+                v[a] >= lo - slack && v[a] <= hi + slack,
                 "{what}: {v:?} outside the region"
             );
         }
@@ -238,5 +245,78 @@ proptest! {
         }
         prop_assert!(value_at(&s, w) < 0.0, "the witness {w:?} stays inside");
         mesh_ok(&s, cube(-1.0, 1.0), depth, "random csg");
+    }
+}
+
+/// Random CSG (as above) in a random box-shaped region that need not be a cube nor centred,
+/// at a random tolerance: none, the default, a fraction of a cell, or many cells (merging
+/// then goes as far as the topology test allows, which alone keeps the mesh manifold).
+fn random_shape(
+    witness: [i32; 3],
+    first_r: f64,
+    parts: Vec<([f64; 3], f64, u8, [f64; 3])>,
+) -> (Shape, [f64; 3]) {
+    let (x, y, z) = xyz();
+    let w = witness.map(|k| -1.0 + 0.25 * f64::from(k));
+    let mut s = sphere_at(w, first_r);
+    for (c, r, op, n) in parts {
+        let part = if op == 3 {
+            x.clone() * n[0] + y.clone() * n[1] + z.clone() * n[2] - r
+        } else {
+            sphere_at(c, r)
+        };
+        let at_w = value_at(&part, w);
+        s = match op {
+            1 if at_w < 0.0 => s.max(&part),
+            2 if at_w > 0.0 => s.max(&(part * -1.0)),
+            _ => s.min(&part),
+        };
+    }
+    (s, w)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+    #[test]
+    fn random_csg_in_random_regions_at_any_tolerance(
+        witness in prop::array::uniform3(1i32..8),
+        first_r in 0.05f64..0.7,
+        parts in prop::collection::vec(
+            (prop::array::uniform3(-0.8f64..0.8), 0.05f64..0.7, 0u8..4, prop::array::uniform3(-1.0f64..1.0)),
+            0..6,
+        ),
+        lo in prop::array::uniform3(-1.3f64..-0.8),
+        hi in prop::array::uniform3(0.8f64..1.3),
+        tolerance in prop::sample::select(vec![-1.0, 0.0, 0.05, 0.5, 3.0, 50.0]),
+        depth in 3u8..7,
+    ) {
+        let (s, w) = random_shape(witness, first_r, parts);
+        prop_assert!(value_at(&s, w) < 0.0, "the witness {w:?} stays inside");
+        let bounds = Bounds::new(lo, hi).expect("a box");
+        let mut settings = MeshSettings::new(bounds, depth);
+        // −1: the default; else cells of the finest level.
+        settings.tolerance = (tolerance >= 0.0).then(|| tolerance * settings.cell());
+        let what = format!("random csg, tolerance {tolerance} cells");
+        // The region's lattice need not hold the witness: a surface is expected when a
+        // corner of the witness's cell is inside.
+        let cell = settings.cell();
+        let near = (0..8).any(|c| {
+            let p = [0, 1, 2].map(|a| {
+                let k = ((w[a] - lo[a]) / cell).floor() + ((c >> a) & 1) as f64;
+                lo[a] + k * cell
+            });
+            (0..3).all(|a| p[a] > lo[a] && p[a] < hi[a]) && value_at(&s, p) < 0.0
+        });
+        if near {
+            mesh_ok_with(&s, &settings, &what);
+        } else {
+            let mesh = mesh_shape(&s, &settings);
+            let report = check(&mesh);
+            prop_assert!(
+                mesh.triangles.is_empty() || report.is_closed_manifold(),
+                "{what}: {:?}",
+                report.problems()
+            );
+        }
     }
 }

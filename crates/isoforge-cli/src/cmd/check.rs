@@ -6,10 +6,11 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::Args;
-use isoforge_mesh::{MeshReport, check, read_mesh};
+use isoforge_field::ClippedField;
+use isoforge_mesh::{Deviation, MeshReport, check, deviation, read_mesh};
 use serde_json::json;
 
-use crate::common::{Global, print_json};
+use crate::common::{Global, ModelArgs, print_json};
 
 /// Arguments of `isoforge check`.
 #[derive(Args, Debug)]
@@ -20,6 +21,22 @@ use crate::common::{Global, print_json};
 pub struct CheckArgs {
     /// The mesh file: STL (binary or ASCII), 3MF, OBJ or PLY.
     pub mesh: PathBuf,
+    /// Also measure how far the mesh is from this model's surface (largest and mean
+    /// distance, by the model's field).
+    #[arg(long, value_name = "MODEL")]
+    pub against: Option<PathBuf>,
+    /// With --against: set a script parameter, NAME=VALUE (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE", requires = "against")]
+    pub params: Vec<String>,
+    /// With --against: the region X0,Y0,Z0,X1,Y1,Z1 the mesh was made in (default: the
+    /// script's).
+    #[arg(
+        long,
+        value_name = "X0,Y0,Z0,X1,Y1,Z1",
+        allow_hyphen_values = true,
+        requires = "against"
+    )]
+    pub bounds: Option<String>,
 }
 
 /// Runs the command.
@@ -31,12 +48,39 @@ pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
             return Err(crate::common::usage(e.to_string()));
         }
     };
+    // The model is loaded before the mesh is judged, so a bad model is an error, not a
+    // report without its figures.
+    let field = match &args.against {
+        Some(model) => {
+            let loaded = ModelArgs {
+                model: model.clone(),
+                params: args.params.clone(),
+                bounds: args.bounds.clone(),
+                script_timeout: isoforge_script::DEFAULT_MAX_SECONDS,
+                script_memory: isoforge_script::DEFAULT_MAX_MEMORY_BYTES >> 20,
+            }
+            .load()?;
+            Some(ClippedField::new(&loaded.model.shape, loaded.bounds))
+        }
+        None => None,
+    };
     let report = check(&mesh);
+    let dev = field.as_ref().map(|f| deviation(&mesh, f));
     let name = args.mesh.display().to_string();
     if global.json {
-        print_json(&report_json(&name, &report));
+        let mut j = report_json(&name, &report);
+        if let (Some(d), Some(obj)) = (dev, j.as_object_mut()) {
+            obj.insert("max_deviation".into(), json!(d.max));
+            obj.insert("mean_deviation".into(), json!(d.mean));
+            obj.insert("max_deviation_at".into(), json!(d.at));
+            obj.insert("deviation_samples".into(), json!(d.samples));
+        }
+        print_json(&j);
     } else if !global.quiet {
         print!("{}", report_text(&name, &report));
+        if let Some(d) = dev {
+            print!("{}", deviation_text(&d));
+        }
     }
     Ok(if report.is_closed_manifold() {
         ExitCode::SUCCESS
@@ -121,6 +165,21 @@ pub fn report_text(file: &str, r: &MeshReport) -> String {
         let _ = writeln!(s, "  problem: {p}");
     }
     s
+}
+
+/// The distance rows of the readable report.
+fn deviation_text(d: &Deviation) -> String {
+    format!(
+        "  {:<24}{:.6} mm (at [{}, {}, {}])\n  {:<24}{:.6} mm ({} points sampled)\n",
+        "max deviation",
+        d.max,
+        d.at[0] as f32,
+        d.at[1] as f32,
+        d.at[2] as f32,
+        "mean deviation",
+        d.mean,
+        d.samples
+    )
 }
 
 fn yes_no(b: bool) -> String {

@@ -7,8 +7,8 @@ use std::time::Instant;
 
 use anyhow::{Context as _, Result, bail};
 use clap::Args;
-use isoforge_mesh::io::encode;
-use isoforge_mesh::{MAX_DEPTH, MeshFormat, MeshSettings, check};
+use isoforge_mesh::io::MeshWriter;
+use isoforge_mesh::{MAX_DEPTH, MeshError, MeshFormat, MeshSettings, StreamCheck};
 use isoforge_output::{Options, OutputFile};
 use serde_json::json;
 
@@ -33,6 +33,11 @@ pub struct MeshArgs {
     /// Finest level: 2^N cells along the region's longest side.
     #[arg(long, value_name = "N")]
     depth: Option<u8>,
+    /// Largest distance in mm between the mesh and the true surface: flat parts get large
+    /// triangles (default: a tenth of the finest cell; 0 keeps every cell at the finest
+    /// size).
+    #[arg(long, value_name = "MM")]
+    tolerance: Option<f64>,
     /// stl (binary), stl-ascii, 3mf, obj or ply (default: from OUT's extension, else stl).
     #[arg(long, value_name = "F")]
     format: Option<String>,
@@ -90,6 +95,13 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
     {
         return usage(format!("--depth {d}: at most {MAX_DEPTH}"));
     }
+    if let Some(t) = args.tolerance
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return usage(format!(
+            "--tolerance {t}: expected a distance in mm, 0 or more"
+        ));
+    }
     if args.threads == Some(0) {
         return usage("--threads 0: expected at least 1".into());
     }
@@ -123,13 +135,35 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
     let bar = progress_bar(global, 1000, "meshing");
     let mut settings = MeshSettings::new(bounds, depth);
     settings.threads = args.threads.unwrap_or(0);
+    settings.tolerance = args.tolerance;
     let bar_cb = bar.clone();
     settings.progress = Some(Arc::new(move |f: f64| {
         bar_cb.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64)
     }));
-    let mesh = isoforge_mesh::try_mesh_shape(&loaded.model.shape, &settings)?;
+    // The mesh goes to the file as it is made, through a checker: never held whole.
+    let spill_folder = out
+        .target()
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(std::env::temp_dir);
+    let writer = MeshWriter::streaming(
+        format,
+        std::io::BufWriter::with_capacity(1 << 20, out),
+        &spill_folder,
+    )
+    .with_context(|| format!("{}: cannot write the mesh", output.display()))?;
+    let centre = [0, 1, 2].map(|a| (bounds.min[a] + bounds.max[a]) * 0.5);
+    let mut sink = StreamCheck::new(writer, centre);
+    match isoforge_mesh::mesh_shape_into(&loaded.model.shape, &settings, &mut sink) {
+        Ok(()) => {}
+        Err(MeshError::Write(e)) => {
+            return Err(e).with_context(|| format!("{}: cannot write the mesh", output.display()));
+        }
+        Err(e) => return Err(e.into()),
+    }
     bar.finish_and_clear();
-    if mesh.triangles.is_empty() {
+    let (report, writer) = sink.finish();
+    if report.tally.triangles == 0 {
         bail!(
             "{}: nothing is inside the region {:?} to {:?} at depth {depth} (the field is not \
              negative at any lattice corner; parts thinner than a cell need a finer --depth)",
@@ -138,37 +172,41 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
             bounds.max
         );
     }
-    let report = check(&mesh);
-    out.write_with(|w| {
-        encode(&mesh, format, w)
-            .with_context(|| format!("{}: cannot write the mesh", output.display()))
-    })?;
+    let file = writer
+        .finish()
+        .and_then(|buf| buf.into_inner().map_err(|e| e.into_error()))
+        .with_context(|| format!("{}: cannot write the mesh", output.display()))?;
+    file.commit()?;
     let seconds = start.elapsed().as_secs_f64();
     if global.json {
         print_json(&json!({
-            "triangles": report.triangles,
-            "vertices": report.vertices,
-            "volume": report.volume,
-            "area": report.area,
-            "bounds": report.bounds,
+            "triangles": report.tally.triangles,
+            "vertices": report.tally.vertices,
+            "volume": report.tally.volume(),
+            "area": report.tally.area(),
+            "bounds": report.tally.bounds.map(|b| b.map(|c| c.map(f64::from))),
             "watertight": report.watertight,
             "manifold": report.manifold,
+            "depth": depth,
+            "tolerance": settings.effective_tolerance(),
             "seconds": seconds,
         }));
     } else if !global.quiet {
         println!(
-            "{}: {} triangles, {} vertices, volume {:.6}, depth {depth}, {:.2} s",
+            "{}: {} triangles, {} vertices, volume {:.6}, depth {depth}, tolerance {:.3e} mm, {:.2} s",
             output.display(),
-            report.triangles,
-            report.vertices,
-            report.volume,
+            report.tally.triangles,
+            report.tally.vertices,
+            report.tally.volume(),
+            settings.effective_tolerance(),
             seconds
         );
     }
     if !report.is_closed_manifold() {
         eprintln!(
-            "error: the mesh is not closed and manifold: {}",
-            report.problems().join("; ")
+            "error: the mesh is not closed and manifold ({} vertices on holes; watertight: {}, \
+             manifold: {}); please report this as a bug with the model",
+            report.open_vertices, report.watertight, report.manifold
         );
         return Ok(ExitCode::from(1));
     }

@@ -102,3 +102,50 @@ fn quiet_prints_nothing_but_keeps_the_verdict() {
     assert_eq!(out.status.code(), Some(1));
     assert!(out.stdout.is_empty() && out.stderr.is_empty());
 }
+
+#[test]
+fn against_a_model_measures_the_distance_to_its_surface() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ball.stl");
+    let out_s = out.display().to_string();
+    let sphere = fixtures().join("bench/sphere.rhai").display().to_string();
+    let made = isoforge(&["mesh", &sphere, "-o", &out_s, "--depth", "6", "--quiet"]);
+    assert!(made.status.success());
+    let deviation = |model: &str, extra: &[&str]| {
+        let mut args = vec!["check", &out_s, "--against", model, "--json"];
+        args.extend_from_slice(extra);
+        let run = isoforge(&args);
+        assert_eq!(run.status.code(), Some(0), "{model}");
+        let j: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+        assert_eq!(j["watertight"], true);
+        let (max, mean) = (j["max_deviation"].as_f64(), j["mean_deviation"].as_f64());
+        (max.unwrap_or(f64::NAN), mean.unwrap_or(f64::NAN))
+    };
+    // Against its own model: within the default tolerance, a tenth of a cell.
+    let (max, mean) = deviation(&sphere, &[]);
+    assert!(max <= 0.1 * 3.0 / 64.0 && mean <= max, "{max} {mean}");
+    // Against a ball 0.2 larger, by a script parameter: about 0.2 everywhere.
+    let scaled = dir.path().join("ball_r.rhai");
+    std::fs::write(
+        &scaled,
+        "let r = param(\"r\", 1.0, 0.1, 3.0);\nbounds([-1.5, -1.5, -1.5], [1.5, 1.5, 1.5]);\nx^2 + y^2 + z^2 - r * r\n",
+    )
+    .unwrap();
+    let scaled = scaled.display().to_string();
+    let (max, mean) = deviation(&scaled, &["--param", "r=1.2"]);
+    assert!(
+        (max - 0.2).abs() < 0.01 && (mean - 0.2).abs() < 0.01,
+        "{max} {mean}"
+    );
+    // The readable report has the two rows.
+    let run = isoforge(&["check", &out_s, "--against", &sphere]);
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        text.contains("max deviation") && text.contains("mean deviation"),
+        "{text}"
+    );
+    // A model that cannot be read is an error, not a report without its figures.
+    let run = isoforge(&["check", &out_s, "--against", "no/such/model.rhai"]);
+    assert_ne!(run.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("no/such/model.rhai"));
+}

@@ -189,3 +189,95 @@ fn failed_work_exits_1_and_writes_nothing() {
     assert_eq!(run.status.code(), Some(1));
     assert!(!out.exists());
 }
+
+#[test]
+fn every_fixture_is_closed_at_depths_6_8_and_9_with_the_default_tolerance() {
+    // The merged (adaptive) output on every model the project ships, at the depths users
+    // print at: closed, manifold and oriented as written and as read back.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let all = models("classic")
+        .into_iter()
+        .chain(models("bench"))
+        .chain(models("flat"));
+    for model in all {
+        for depth in ["6", "8", "9"] {
+            let out = dir.path().join("out.stl");
+            mesh_ok(&model, &out, &["--depth", depth]);
+        }
+    }
+}
+
+#[test]
+fn tolerance_trades_triangles_for_distance() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("sphere.stl");
+    let sphere = fixtures().join("bench/sphere.rhai");
+    let triangles = |extra: &[&str]| {
+        let mut args = vec!["--depth", "6"];
+        args.extend_from_slice(extra);
+        let json = mesh_ok(&sphere, &out, &args);
+        (
+            json["triangles"].as_u64().unwrap_or(0),
+            json["tolerance"].as_f64(),
+        )
+    };
+    let (uniform, t0) = triangles(&["--tolerance", "0"]);
+    let (default, t_default) = triangles(&[]);
+    let (coarse, t_coarse) = triangles(&["--tolerance", "0.02"]);
+    assert_eq!(t0, Some(0.0));
+    // The default: a tenth of the finest cell (3 mm / 64).
+    assert!((t_default.unwrap_or(0.0) - 0.1 * 3.0 / 64.0).abs() < 1e-12);
+    assert_eq!(t_coarse, Some(0.02));
+    assert!(
+        uniform > 2 * default && default > coarse,
+        "{uniform} {default} {coarse}"
+    );
+    // The tolerance held, as `check --against` measures it.
+    for (tolerance, flag) in [(0.1 * 3.0 / 64.0, None), (0.02, Some("0.02"))] {
+        let mut args = vec!["--depth", "6"];
+        if let Some(t) = flag {
+            args.extend(["--tolerance", t]);
+        }
+        mesh_ok(&sphere, &out, &args);
+        let run = isoforge(&["check", s(&out), "--against", s(&sphere), "--json"]);
+        assert!(run.status.success());
+        let json: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+        let max = json["max_deviation"].as_f64().unwrap_or(f64::MAX);
+        assert!(max <= tolerance, "max deviation {max} > {tolerance}");
+    }
+}
+
+#[test]
+fn box_like_models_take_few_triangles() {
+    // Flat faces merge into large cells: an axis-aligned box at depth 9 (512 cells along
+    // its region) is a few hundred triangles, not hundreds of thousands, and keeps its
+    // volume.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("prism.stl");
+    let json = mesh_ok(&fixtures().join("flat/prism.rhai"), &out, &["--depth", "9"]);
+    let triangles = json["triangles"].as_u64().unwrap_or(u64::MAX);
+    assert!(triangles < 2000, "{triangles} triangles");
+    let vol = json["volume"].as_f64().unwrap_or(0.0);
+    assert!((vol - 3000.0).abs() < 1.0, "{vol}");
+}
+
+#[test]
+fn bad_tolerances_exit_2_and_write_nothing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("x.stl");
+    let sphere = fixtures().join("bench/sphere.rhai");
+    for t in ["-1", "nan", "inf", "wide", "-0.5"] {
+        let run = isoforge(&[
+            "mesh",
+            s(&sphere),
+            "-o",
+            s(&out),
+            "--depth",
+            "4",
+            &format!("--tolerance={t}"),
+        ]);
+        assert_eq!(run.status.code(), Some(2), "--tolerance {t}");
+        assert!(!run.stderr.is_empty(), "--tolerance {t} says why");
+        assert!(!out.exists(), "--tolerance {t} wrote a file");
+    }
+}

@@ -38,9 +38,7 @@ fn admesh_figures(stl: &Path) -> Vec<(String, f64)> {
         .arg(stl)
         .output()
         .unwrap_or_else(|e| {
-            panic!(
-                "admesh did not run ({e}): tools/install-peers.sh installs it, .ci/run calls it"
-            )
+            panic!("admesh did not run ({e}): tools/install-peers.sh installs it, .ci/run calls it")
         });
     assert!(
         run.status.success(),

@@ -33,6 +33,9 @@ pub struct Grid {
     pub block_level: u32,
     /// Cells per block side.
     pub block: usize,
+    /// The region's highest corner: the lattice reaches it along the longest side and
+    /// passes it along the others, where vertices are kept on the region's side.
+    pub top: [f64; 3],
 }
 
 impl Grid {
@@ -46,12 +49,23 @@ impl Grid {
             depth,
             block_level: depth - shift,
             block: 1 << shift,
+            top: bounds.max,
         }
     }
 
     /// The position of lattice corner `g`.
     pub fn corner(&self, g: [i64; 3]) -> [f64; 3] {
         [0, 1, 2].map(|i| self.origin[i] + g[i] as f64 * self.cell)
+    }
+
+    /// Where a vertex of the cube with lowest corner `lo` and side `size` may go: the cube
+    /// inset by `inset`, and on the region's side of its highest walls (a vertex there
+    /// would be as far out as its cell reaches, a cell's size away from the region at
+    /// coarse depths). The region's lowest walls are lattice planes already.
+    pub fn vertex_box(&self, lo: [f64; 3], size: f64, inset: f64) -> ([f64; 3], [f64; 3]) {
+        let hi = [0, 1, 2].map(|a| (lo[a] + size - inset).min(self.top[a]));
+        let lo = [0, 1, 2].map(|a| (lo[a] + inset).min(hi[a]));
+        (lo, hi)
     }
 
     /// Blocks per axis.
@@ -170,7 +184,11 @@ impl<S: Sampler> BuildCtx<'_, '_, S> {
         if f.inf() >= 0.0 {
             return Built::Empty;
         }
-        if f.sup() < 0.0 {
+        // The lattice's last plane of corners belongs to no block and counts as outside,
+        // so a cube touching it is never full, whatever the interval says (it can say so
+        // when that plane lands a rounding error inside the region's wall).
+        let last = 1i64 << level;
+        if f.sup() < 0.0 && coords.iter().all(|&c| c + 1 < last) {
             return Built::Full;
         }
         let narrowed = self.sampler.narrow(guard.get(), local);

@@ -9,6 +9,7 @@ mod error;
 pub mod obj;
 pub mod ply;
 pub mod stl;
+pub mod stream;
 pub mod threemf;
 mod weld;
 
@@ -18,6 +19,9 @@ use std::path::Path;
 use isoforge_output::{Options, OutputFile};
 
 use crate::mesh::Mesh;
+use crate::sink::MeshSink;
+
+pub use stream::MeshWriter;
 
 pub use error::{ParseError, ParseErrorKind, Place};
 pub(crate) use error::{at_line, too_many_vertices};
@@ -175,13 +179,14 @@ pub fn encode(mesh: &Mesh, format: MeshFormat, w: &mut dyn Write) -> std::io::Re
             "the mesh has a triangle index past its last vertex",
         ));
     }
-    match format {
-        MeshFormat::Stl => stl::write_binary(mesh, w),
-        MeshFormat::StlAscii => stl::write_ascii(mesh, w),
-        MeshFormat::ThreeMf => threemf::write(mesh, w),
-        MeshFormat::Obj => obj::write(mesh, w),
-        MeshFormat::Ply => ply::write(mesh, w),
+    let mut writer = MeshWriter::ordered(format, w, mesh.vertices.len(), mesh.triangles.len())?;
+    for &v in &mesh.vertices {
+        writer.vertex(v)?;
     }
+    for &t in &mesh.triangles {
+        writer.triangle(t, t.map(|i| mesh.vertices[i as usize]))?;
+    }
+    writer.finish().map(drop)
 }
 
 /// Writes a mesh file by the rules of [`isoforge_output`]: whole or not at all, into a

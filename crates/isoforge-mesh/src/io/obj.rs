@@ -4,11 +4,8 @@
 //! from the last vertex defined so far; polygons are fanned into triangles. Texture
 //! coordinates, normals, groups and materials are skipped.
 
-use std::io::Write;
-
 use super::{
-    ParseError, ParseErrorKind, Place, at_line, fmt_coord, parse_coord, text_lines,
-    too_many_vertices,
+    ParseError, ParseErrorKind, Place, at_line, parse_coord, text_lines, too_many_vertices,
 };
 use crate::mesh::Mesh;
 
@@ -95,29 +92,4 @@ fn resolve(token: &str, defined: usize, line: usize) -> Result<u32, ParseError> 
         return Err(bad());
     }
     Ok(zero_based as u32)
-}
-
-/// Writes an OBJ file (1-based indices).
-pub fn write(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
-    let mut w = std::io::BufWriter::with_capacity(1 << 16, w);
-    writeln!(w, "# isoforge")?;
-    writeln!(
-        w,
-        "# {} vertices, {} triangles",
-        mesh.vertices.len(),
-        mesh.triangles.len()
-    )?;
-    for p in &mesh.vertices {
-        writeln!(
-            w,
-            "v {} {} {}",
-            fmt_coord(p[0]),
-            fmt_coord(p[1]),
-            fmt_coord(p[2])
-        )?;
-    }
-    for t in &mesh.triangles {
-        writeln!(w, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
-    }
-    w.flush()
 }

@@ -6,8 +6,6 @@
 //! type); polygons are fanned into triangles. Every other element and property is read
 //! past and dropped.
 
-use std::io::Write;
-
 use super::{ParseError, ParseErrorKind, Place, at_line, too_many_vertices};
 use crate::mesh::Mesh;
 
@@ -436,46 +434,4 @@ fn read_property(body: &mut Body<'_>, prop: &Property) -> Result<Option<f64>, Pa
             Ok(None)
         }
     }
-}
-
-/// Writes binary little-endian PLY: float x y z, and faces as `uchar` counts of `int`
-/// indices (the layout most tools read).
-pub fn write(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
-    write!(
-        w,
-        "ply\nformat binary_little_endian 1.0\ncomment isoforge\n\
-         element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
-         element face {}\nproperty list uchar int vertex_indices\nend_header\n",
-        mesh.vertices.len(),
-        mesh.triangles.len()
-    )?;
-    let mut buf = Vec::with_capacity(1 << 16);
-    for p in &mesh.vertices {
-        for v in p {
-            buf.extend_from_slice(&(v + 0.0).to_le_bytes());
-        }
-        if buf.len() >= 1 << 16 {
-            w.write_all(&buf)?;
-            buf.clear();
-        }
-    }
-    for t in &mesh.triangles {
-        buf.push(3);
-        for &i in t {
-            // Indices past i32::MAX cannot be written as PLY `int`; such meshes are beyond
-            // what the readers could load anyway.
-            let i = i32::try_from(i).map_err(|_| {
-                std::io::Error::new(
-                    std::io::ErrorKind::InvalidInput,
-                    "vertex index too large for PLY int",
-                )
-            })?;
-            buf.extend_from_slice(&i.to_le_bytes());
-        }
-        if buf.len() >= 1 << 16 {
-            w.write_all(&buf)?;
-            buf.clear();
-        }
-    }
-    w.write_all(&buf)
 }

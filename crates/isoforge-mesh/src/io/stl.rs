@@ -6,9 +6,7 @@
 //! `endsolid`. STL does not share vertices, so both readers weld corners at exactly equal
 //! positions. We parse ASCII ourselves: stl_io rejects `solid` with no name (docs/constants.md).
 
-use std::io::Write;
-
-use super::{ParseError, ParseErrorKind, Place, Welder, at_line, fmt_coord, parse_coord};
+use super::{ParseError, ParseErrorKind, Place, Welder, at_line, parse_coord};
 use crate::mesh::Mesh;
 
 const HEADER: usize = 80;
@@ -238,46 +236,4 @@ pub fn read_ascii(bytes: &[u8]) -> Result<Mesh, ParseError> {
         ));
     }
     Ok(welder.finish())
-}
-
-/// Writes binary STL through stl_io, with each normal computed from its triangle's winding
-/// and `-0.0` written as `0.0` (stl_io and others weld by bit pattern).
-pub fn write_binary(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
-    let tris = mesh.triangles.iter().map(|&t| stl_io::Triangle {
-        normal: stl_io::Normal::new(mesh.triangle_normal(t).map(|v| v + 0.0)),
-        vertices: t.map(|i| stl_io::Vertex::new(mesh.vertices[i as usize].map(|v| v + 0.0))),
-    });
-    stl_io::write_stl(&mut &mut *w, tris)
-}
-
-/// Writes ASCII STL; coordinates are written so they read back to the same f32.
-pub fn write_ascii(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
-    // Dozens of small writes a facet: buffer them here, whatever `w` is.
-    let mut w = std::io::BufWriter::with_capacity(1 << 16, w);
-    writeln!(w, "solid isoforge")?;
-    for &t in &mesh.triangles {
-        let n = mesh.triangle_normal(t);
-        writeln!(
-            w,
-            "  facet normal {} {} {}",
-            fmt_coord(n[0]),
-            fmt_coord(n[1]),
-            fmt_coord(n[2])
-        )?;
-        writeln!(w, "    outer loop")?;
-        for i in t {
-            let p = mesh.vertices[i as usize];
-            writeln!(
-                w,
-                "      vertex {} {} {}",
-                fmt_coord(p[0]),
-                fmt_coord(p[1]),
-                fmt_coord(p[2])
-            )?;
-        }
-        writeln!(w, "    endloop")?;
-        writeln!(w, "  endfacet")?;
-    }
-    writeln!(w, "endsolid isoforge")?;
-    w.flush()
 }

@@ -71,6 +71,43 @@ fn every_format_round_trips() {
 }
 
 #[test]
+fn streaming_writers_match_the_whole_mesh_writers() {
+    use crate::sink::MeshSink;
+    // The mesher's order: vertices and triangles interleaved, each triangle right after
+    // its last vertex, counts unknown until the end.
+    let mesh = merge(uv_sphere(3.25, 9, 6), &cube(2.0));
+    let mut last_use: Vec<Vec<usize>> = vec![Vec::new(); mesh.vertices.len()];
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let last = tri.iter().copied().max().unwrap_or(0) as usize;
+        last_use[last].push(t);
+    }
+    let spill = tempfile::tempdir().unwrap();
+    for format in ALL {
+        let mut w = stream::MeshWriter::streaming(format, Vec::new(), spill.path()).unwrap();
+        for (v, tris) in last_use.iter().enumerate() {
+            w.vertex(mesh.vertices[v]).unwrap();
+            for &t in tris {
+                let tri = mesh.triangles[t];
+                let corners = tri.map(|i| mesh.vertices[i as usize]);
+                w.triangle(tri, corners).unwrap();
+            }
+        }
+        let bytes = w.finish().unwrap();
+        let back = read_mesh_bytes(&bytes, &format!("m.{}", format.name())).unwrap();
+        let mut got = soup(&back);
+        let mut want = soup(&mesh);
+        got.sort_unstable();
+        want.sort_unstable();
+        assert_eq!(got, want, "{format:?}");
+        if format != MeshFormat::Stl && format != MeshFormat::StlAscii {
+            assert_eq!(back.triangles.len(), mesh.triangles.len(), "{format:?}");
+        }
+        // The spill files are unnamed: nothing is left in the folder.
+        assert_eq!(std::fs::read_dir(spill.path()).unwrap().count(), 0);
+    }
+}
+
+#[test]
 fn stl_readers_weld_to_a_closed_mesh() {
     for format in [MeshFormat::Stl, MeshFormat::StlAscii] {
         let back = read_mesh_bytes(&bytes_of(&cube(1.0), format), "c.stl").unwrap();

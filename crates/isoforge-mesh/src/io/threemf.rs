@@ -14,11 +14,11 @@
 
 use std::borrow::Cow;
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader, Cursor, Read, Write};
+use std::io::{BufRead, BufReader, Cursor, Read};
 
 use quick_xml::events::{BytesStart, Event};
 
-use super::{ParseError, ParseErrorKind, Place, fmt_coord, too_many_vertices};
+use super::{ParseError, ParseErrorKind, Place, too_many_vertices};
 use crate::mesh::Mesh;
 
 /// The model part's largest accepted size once inflated: a guard against zip bombs that
@@ -41,7 +41,7 @@ const MAX_INSTANCES: usize = 1_000_000;
 
 /// Deflate level for written packages. Model XML is repetitive; see `benches/meshio.rs`
 /// write_1m/3mf for the time this choice costs.
-const DEFLATE_LEVEL: i64 = 1;
+pub(crate) const DEFLATE_LEVEL: i64 = 1;
 
 /// A row-vector affine transform as 3MF writes it: `p' = p * M`, 12 numbers
 /// `m00 m01 m02 m10 m11 m12 m20 m21 m22 m30 m31 m32`.
@@ -588,68 +588,22 @@ fn instantiate(
     Ok(())
 }
 
-const CONTENT_TYPES: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+pub(crate) const CONTENT_TYPES: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
 <Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types"><Default Extension="rels" ContentType="application/vnd.openxmlformats-package.relationships+xml"/><Default Extension="model" ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/></Types>
 "#;
 
-const RELS: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+pub(crate) const RELS: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
 <Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships"><Relationship Target="/3D/3dmodel.model" Id="rel0" Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/></Relationships>
 "#;
 
-/// Writes a minimal valid 3MF package: content types, the root relationship, and one
-/// object in millimetres placed by one build item.
-pub fn write(mesh: &Mesh, w: &mut dyn Write) -> std::io::Result<()> {
-    use std::fmt::Write as _;
-    let to_io = |e: zip::result::ZipError| std::io::Error::other(e.to_string());
-    let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
-    let deflate = zip::write::SimpleFileOptions::default()
-        .compression_method(zip::CompressionMethod::Deflated)
-        .compression_level(Some(DEFLATE_LEVEL));
-    zip.start_file("[Content_Types].xml", deflate)
-        .map_err(to_io)?;
-    zip.write_all(CONTENT_TYPES.as_bytes())?;
-    zip.start_file("_rels/.rels", deflate).map_err(to_io)?;
-    zip.write_all(RELS.as_bytes())?;
-    zip.start_file("3D/3dmodel.model", deflate).map_err(to_io)?;
-    let mut buf = String::with_capacity(1 << 16);
-    buf.push_str(
-        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<model unit=\"millimeter\" \
-         xml:lang=\"en-US\" xmlns=\"http://schemas.microsoft.com/3dmanufacturing/core/2015/02\">\n\
-         <resources>\n<object id=\"1\" type=\"model\">\n<mesh>\n<vertices>\n",
-    );
-    for p in &mesh.vertices {
-        let _ = writeln!(
-            buf,
-            "<vertex x=\"{}\" y=\"{}\" z=\"{}\"/>",
-            fmt_coord(p[0]),
-            fmt_coord(p[1]),
-            fmt_coord(p[2])
-        );
-        if buf.len() > 1 << 16 {
-            zip.write_all(buf.as_bytes())?;
-            buf.clear();
-        }
-    }
-    buf.push_str("</vertices>\n<triangles>\n");
-    for t in &mesh.triangles {
-        let _ = writeln!(
-            buf,
-            "<triangle v1=\"{}\" v2=\"{}\" v3=\"{}\"/>",
-            t[0], t[1], t[2]
-        );
-        if buf.len() > 1 << 16 {
-            zip.write_all(buf.as_bytes())?;
-            buf.clear();
-        }
-    }
-    buf.push_str(
-        "</triangles>\n</mesh>\n</object>\n</resources>\n<build>\n<item objectid=\"1\"/>\n\
-         </build>\n</model>\n",
-    );
-    zip.write_all(buf.as_bytes())?;
-    let bytes = zip.finish().map_err(to_io)?.into_inner();
-    w.write_all(&bytes)
-}
+/// The model part's opening, up to the first vertex.
+pub(crate) const MODEL_HEAD: &str = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<model unit=\"millimeter\" \
+     xml:lang=\"en-US\" xmlns=\"http://schemas.microsoft.com/3dmanufacturing/core/2015/02\">\n\
+     <resources>\n<object id=\"1\" type=\"model\">\n<mesh>\n<vertices>\n";
+
+/// The model part's closing, after the last triangle: one build item places the object.
+pub(crate) const MODEL_TAIL: &str = "</triangles>\n</mesh>\n</object>\n</resources>\n<build>\n\
+     <item objectid=\"1\"/>\n</build>\n</model>\n";
 
 #[cfg(test)]
 mod tests {

@@ -1,0 +1,362 @@
+//! The mesher's schedule: blocks slab by slab along z, each slab's polygons handed to the
+//! sink as soon as the slab below it is done, so memory holds a few slabs, not the mesh.
+//!
+//! For slab z: (1) sample the corner signs of slab z + 1 (a block's corners on its upper
+//! faces are owned by the blocks above it); (2) agree slab z's signs, find its crossings,
+//! merge its cells into leaves (`leaf.rs`); (3) build the polygons of slab z's own edges,
+//! which need its leaves and those of slab z − 1 (`contour.rs`), and give them global
+//! vertex indices in a fixed order, so the output is the same on every run; (4) let the
+//! merges above the block level (`merge.rs`) decide the nodes whose last slab this was, and
+//! finish the polygons that waited for them. Slab z − 1 is then dropped.
+
+use std::io;
+use std::sync::atomic::Ordering;
+
+use rayon::prelude::*;
+
+use super::contour::{self, Polygon, Ref};
+use super::hermite::{self, Crossing, EdgeRef, Scratch};
+use super::leaf::{self, BlockInput, BlockOut, LeafScratch, Merging, NO_VERT};
+use super::merge::{AboveBlocks, Resolved};
+use super::octree::{Class, Grid, Octree};
+use super::sampler::{EvalPool, Sampler};
+use super::{MeshError, MeshSettings, Reporter};
+use crate::sink::MeshSink;
+
+/// A finished block: its leaves and cells, and the global indices its vertices got.
+struct Record {
+    out: BlockOut,
+    ids: Vec<u32>,
+}
+
+#[derive(Default)]
+struct Pass2Scratch {
+    scratch: Scratch,
+    leaf: LeafScratch,
+    signs: Vec<u8>,
+    edges: Vec<EdgeRef>,
+    slots: Vec<u32>,
+    crossings: Vec<Crossing>,
+}
+
+/// Meshes a sampled field into a sink.
+pub fn run<S: Sampler>(
+    sampler: &S,
+    settings: &MeshSettings,
+    merging: Merging,
+    block_shift: u32,
+    sink: &mut dyn MeshSink,
+) -> Result<(), MeshError> {
+    let progress = settings.progress.as_ref();
+    let cancelled = || {
+        settings
+            .cancel
+            .as_ref()
+            .is_some_and(|c| c.load(Ordering::Relaxed))
+    };
+    let depth = u32::from(settings.depth);
+    let grid = Grid::new(&settings.bounds, depth, block_shift);
+    if let Some(p) = progress {
+        p(0.0);
+    }
+    let mut tree = Octree::build(sampler, grid);
+    if cancelled() {
+        return Err(MeshError::Cancelled);
+    }
+    let blocks = std::mem::take(&mut tree.blocks);
+    let coords: Vec<[i64; 3]> = blocks.iter().map(|b| b.coords).collect();
+    let mut locals: Vec<Option<S::Local>> = blocks.into_iter().map(|b| Some(b.local)).collect();
+    let n = grid.blocks_per_side() as usize;
+    let mut slabs: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for (i, c) in coords.iter().enumerate() {
+        slabs[c[2] as usize].push(i as u32);
+    }
+    for slab in &mut slabs {
+        slab.sort_by_key(|&i| (coords[i as usize][1], coords[i as usize][0]));
+    }
+
+    let pool = EvalPool::new(sampler);
+    let s = hermite::side(&grid);
+    let words = (s * s * s).div_ceil(64);
+    let mut bits: Vec<Option<Vec<u64>>> = vec![None; coords.len()];
+    let mut records: Vec<Option<Record>> = (0..coords.len()).map(|_| None).collect();
+    let mut above = AboveBlocks::new(grid, merging);
+    let mut emitter = Emitter {
+        sink,
+        next: 0,
+        deferred: Vec::new(),
+        tris: Vec::new(),
+    };
+    let report = Reporter::new(progress, coords.len(), 0.1, 0.99);
+
+    let own_signs = |slab: &[u32], locals: &[Option<S::Local>]| -> Vec<(u32, Vec<u64>)> {
+        slab.par_iter()
+            .map_init(
+                || (pool.take(), Scratch::default()),
+                |(guard, scratch), &b| {
+                    let mut out = vec![0u64; words];
+                    if let Some(local) = &locals[b as usize] {
+                        hermite::own_signs(
+                            sampler,
+                            guard.get(),
+                            local,
+                            &grid,
+                            coords[b as usize],
+                            scratch,
+                            &mut out,
+                        );
+                    }
+                    (b, out)
+                },
+            )
+            .collect()
+    };
+
+    if let Some(first) = slabs.first() {
+        for (b, out) in own_signs(first, &locals) {
+            bits[b as usize] = Some(out);
+        }
+    }
+    for z in 0..n {
+        if cancelled() {
+            return Err(MeshError::Cancelled);
+        }
+        if z + 1 < n {
+            for (b, out) in own_signs(&slabs[z + 1], &locals) {
+                bits[b as usize] = Some(out);
+            }
+        }
+        // (2) This slab's leaves.
+        let empty: Vec<u64> = vec![0; words];
+        let bits_of = |b: u32| -> &[u64] { bits[b as usize].as_deref().unwrap_or(&empty) };
+        let made: Vec<(u32, BlockOut)> = slabs[z]
+            .par_iter()
+            .map_init(
+                || (pool.take(), Pass2Scratch::default()),
+                |(guard, sc), &b| {
+                    let c = coords[b as usize];
+                    let neighbours: [Class; 27] = std::array::from_fn(|k| {
+                        let d = [k as i64 % 3 - 1, (k as i64 / 3) % 3 - 1, k as i64 / 9 - 1];
+                        tree.class([0, 1, 2].map(|i| c[i] + d[i]))
+                    });
+                    hermite::canonical_signs(&grid, &neighbours, bits_of, &mut sc.signs);
+                    let mut out = BlockOut::default();
+                    if let Some(local) = &locals[b as usize] {
+                        hermite::crossings(
+                            sampler,
+                            guard.get(),
+                            local,
+                            &grid,
+                            c,
+                            &sc.signs,
+                            &mut sc.scratch,
+                            &mut sc.edges,
+                            &mut sc.slots,
+                            &mut sc.crossings,
+                        );
+                        let input = BlockInput {
+                            grid: &grid,
+                            coords: c,
+                            signs: &sc.signs,
+                            edge_slot: &sc.slots,
+                            edges: &sc.edges,
+                            crossings: &sc.crossings,
+                            merging,
+                        };
+                        leaf::build(sampler, guard.get(), local, &input, &mut sc.leaf, &mut out);
+                    }
+                    report.tick();
+                    (b, out)
+                },
+            )
+            .collect();
+        for &b in &slabs[z] {
+            bits[b as usize] = None;
+            locals[b as usize] = None;
+        }
+        for (b, out) in made {
+            above.add_block(coords[b as usize], out.candidate, !out.cells.is_empty());
+            let ids = vec![NO_VERT; out.vertices.len()];
+            records[b as usize] = Some(Record { out, ids });
+        }
+
+        // (3) This slab's polygons, in block order.
+        let polys: Vec<Vec<Polygon>> = slabs[z]
+            .par_iter()
+            .map(|&b| {
+                let mut polys = Vec::new();
+                let Some(me) = &records[b as usize] else {
+                    return polys;
+                };
+                let c = coords[b as usize];
+                let missing = contour::polygons(
+                    &grid,
+                    (b, c, &me.out),
+                    |d| {
+                        let nc = [0, 1, 2].map(|i| c[i] + d[i]);
+                        match tree.class(nc) {
+                            Class::Block(i) => {
+                                records[i as usize].as_ref().map(|r| (i, nc, &r.out))
+                            }
+                            _ => None,
+                        }
+                    },
+                    &mut polys,
+                );
+                debug_assert_eq!(missing, 0, "edge without its 4 cells");
+                polys
+            })
+            .collect();
+        for block_polys in polys {
+            for poly in block_polys {
+                emitter.polygon(poly, &mut records, &mut above)?;
+            }
+        }
+
+        // (4) Merges above the blocks, and the polygons that waited for them.
+        {
+            let mut guard = pool.take();
+            above.finish_slab(z as i64, sampler, guard.get());
+        }
+        emitter.sweep(&mut above)?;
+        above.prune(z as i64);
+        if z >= 1 {
+            for &b in &slabs[z - 1] {
+                records[b as usize] = None;
+            }
+        }
+    }
+    // Everything is decided once the last slab is: the leaves still waiting are final.
+    emitter.sweep(&mut above)?;
+    debug_assert!(emitter.deferred.is_empty(), "polygons left waiting");
+    if let Some(p) = progress {
+        p(1.0);
+    }
+    Ok(())
+}
+
+/// Gives vertices their global indices and polygons their triangles, in order.
+struct Emitter<'s> {
+    sink: &'s mut dyn MeshSink,
+    next: u32,
+    /// Polygons waiting for a candidate's leaf (all their other corners global).
+    deferred: Vec<Polygon>,
+    tris: Vec<([u32; 3], [[f32; 3]; 3])>,
+}
+
+impl Emitter<'_> {
+    fn new_vertex(&mut self, p: [f32; 3]) -> Result<u32, MeshError> {
+        let id = self.next;
+        self.next = self.next.checked_add(1).ok_or(MeshError::TooManyVertices)?;
+        self.sink.vertex(p).map_err(MeshError::Write)?;
+        Ok(id)
+    }
+
+    /// Takes a polygon fresh from a block: its block-local corners get global indices now
+    /// (their blocks will be dropped), and it is finished or set aside to wait.
+    fn polygon(
+        &mut self,
+        mut poly: Polygon,
+        records: &mut [Option<Record>],
+        above: &mut AboveBlocks,
+    ) -> Result<(), MeshError> {
+        for slot in poly.corners_mut() {
+            if let Ref::Local { block, vert } = slot.r {
+                let Some(rec) = records[block as usize].as_mut() else {
+                    continue;
+                };
+                let mut id = rec.ids[vert as usize];
+                if id == NO_VERT {
+                    id = self.new_vertex(rec.out.vertices[vert as usize])?;
+                    rec.ids[vert as usize] = id;
+                }
+                slot.r = Ref::Global(id);
+            }
+        }
+        if self.resolve(&mut poly, above)? {
+            self.finish(&poly)
+        } else {
+            self.deferred.push(poly);
+            Ok(())
+        }
+    }
+
+    /// Replaces candidate corners whose leaf is known by that leaf's vertex; true when none
+    /// is left.
+    fn resolve(&mut self, poly: &mut Polygon, above: &mut AboveBlocks) -> Result<bool, MeshError> {
+        let mut done = true;
+        for slot in poly.corners_mut() {
+            let Ref::Candidate(c) = slot.r else { continue };
+            match above.resolve(c) {
+                Resolved::Waiting => done = false,
+                Resolved::Leaf(key) => {
+                    let Some((pos, mut id)) = above.vertex(key) else {
+                        done = false;
+                        continue;
+                    };
+                    let p = pos.as_vec3().to_array();
+                    if id == NO_VERT {
+                        id = self.new_vertex(p)?;
+                        above.set_id(key, id);
+                    }
+                    slot.r = Ref::Global(id);
+                    slot.pos = p;
+                }
+            }
+        }
+        Ok(done)
+    }
+
+    /// Retries every waiting polygon.
+    fn sweep(&mut self, above: &mut AboveBlocks) -> Result<(), MeshError> {
+        let waiting = std::mem::take(&mut self.deferred);
+        for mut poly in waiting {
+            if self.resolve(&mut poly, above)? {
+                self.finish(&poly)?;
+            } else {
+                self.deferred.push(poly);
+            }
+        }
+        Ok(())
+    }
+
+    /// Triangulates a polygon whose corners are all global and hands the triangles over.
+    fn finish(&mut self, poly: &Polygon) -> Result<(), MeshError> {
+        let corners: Vec<(u32, [f32; 3], bool)> = poly
+            .corners()
+            .iter()
+            .map(|s| match s.r {
+                Ref::Global(id) => (id, s.pos, s.face),
+                // Not reachable: callers resolve every corner first.
+                Ref::Local { .. } | Ref::Candidate(_) => (NO_VERT, s.pos, s.face),
+            })
+            .collect();
+        if corners.iter().any(|c| c.0 == NO_VERT) {
+            return Err(MeshError::Write(io::Error::other(
+                "internal error: a polygon corner without a vertex",
+            )));
+        }
+        let mut tris = std::mem::take(&mut self.tris);
+        tris.clear();
+        let mut centre_err = None;
+        contour::triangulate(
+            &corners,
+            || match self.new_vertex(poly.centre) {
+                Ok(id) => (id, poly.centre),
+                Err(e) => {
+                    centre_err = Some(e);
+                    (NO_VERT, poly.centre)
+                }
+            },
+            &mut tris,
+        );
+        if let Some(e) = centre_err {
+            return Err(e);
+        }
+        for (t, c) in &tris {
+            self.sink.triangle(*t, *c).map_err(MeshError::Write)?;
+        }
+        self.tris = tris;
+        Ok(())
+    }
+}

@@ -1,0 +1,390 @@
+//! How far a mesh is from the surface it stands for, measured by the field itself.
+//!
+//! Each triangle is sampled at its corners, the middles of its edges and its centroid (the
+//! points of a degree-3 quadrature rule, whose weights give the mean). At each point the
+//! distance to the surface is found along the field's gradient: the first-order estimate
+//! |F| / |∇F| says how far to look, a sign change of F on that line is bracketed and
+//! bisected, and the distance to it is the answer. A point whose line finds no sign change
+//! close by (just outside a convex edge, where the nearest surface is not along the
+//! gradient) keeps the first-order estimate.
+//!
+//! ```
+//! use isoforge_field::{Bounds, ClippedField, Shape};
+//! use isoforge_mesh::{deviation, mesh_shape, MeshSettings};
+//! let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+//! let ball = x.square() + y.square() + z.square() - 1.0;
+//! let region = Bounds::new([-1.5; 3], [1.5; 3]).unwrap();
+//! let mesh = mesh_shape(&ball, &MeshSettings::new(region, 5));
+//! let d = deviation(&mesh, &ClippedField::new(&ball, region));
+//! assert!(d.max < 0.05 && d.mean <= d.max);
+//! ```
+
+use glam::{DVec3, Vec3};
+use isoforge_field::{BatchEval, ClippedField, GradEval};
+use rayon::prelude::*;
+
+use crate::mesh::Mesh;
+
+/// Points per batch: large enough for the batch evaluator to pay off.
+const CHUNK: usize = 4096;
+/// Bisection rounds on a bracket: 2^-40 of the bracket, below f32's resolution.
+const BISECTIONS: usize = 40;
+/// How far along the gradient line to look for the surface, in multiples of the
+/// first-order estimate (a smooth field's surface is found well within 2).
+const SEARCH: [f64; 3] = [1.25, 2.0, 4.0];
+
+/// The distance between a mesh and a model's surface.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Deviation {
+    /// The largest distance of a sample point from the surface.
+    pub max: f64,
+    /// The mean distance, weighted by area.
+    pub mean: f64,
+    /// Where the largest distance is.
+    pub at: [f64; 3],
+    /// Points sampled.
+    pub samples: usize,
+    /// Of those, points whose distance is the first-order estimate (no sign change found
+    /// on the gradient line nearby).
+    pub estimated: usize,
+}
+
+/// The distance from the mesh to the field's surface (see the module doc).
+pub fn deviation(mesh: &Mesh, field: &ClippedField) -> Deviation {
+    if !mesh.has_valid_indices() || mesh.triangles.is_empty() {
+        return Deviation::default();
+    }
+    // Sample points, seven per triangle: corners, edge middles, centroid.
+    let points: Vec<[f64; 3]> = mesh
+        .triangles
+        .par_iter()
+        .flat_map_iter(|&t| {
+            let [a, b, c] = t.map(|i| Vec3::from(mesh.vertices[i as usize]).as_dvec3());
+            [
+                a,
+                b,
+                c,
+                (a + b) * 0.5,
+                (b + c) * 0.5,
+                (c + a) * 0.5,
+                (a + b + c) / 3.0,
+            ]
+            .map(|p| p.to_array())
+        })
+        .collect();
+    let mut found: Vec<(f64, bool)> = points
+        .par_chunks(CHUNK)
+        .flat_map_iter(|chunk| distances(field, chunk))
+        .collect();
+    refine_largest(field, &points, &mut found);
+    // Degree-3 rule on a triangle: corners 3/60, edge middles 8/60, centroid 27/60.
+    const WEIGHTS: [f64; 7] = [
+        3.0 / 60.0,
+        3.0 / 60.0,
+        3.0 / 60.0,
+        8.0 / 60.0,
+        8.0 / 60.0,
+        8.0 / 60.0,
+        27.0 / 60.0,
+    ];
+    let mut out = Deviation {
+        samples: found.len(),
+        ..Deviation::default()
+    };
+    let (mut weighted, mut area) = (0.0, 0.0);
+    for (ti, &t) in mesh.triangles.iter().enumerate() {
+        let [a, b, c] = mesh.corners(t);
+        let twice = (b - a).cross(c - a).length();
+        let mut sum = 0.0;
+        for k in 0..7 {
+            let (d, estimated) = found[7 * ti + k];
+            out.estimated += usize::from(estimated);
+            sum += WEIGHTS[k] * d;
+            if d > out.max {
+                out.max = d;
+                out.at = points[7 * ti + k];
+            }
+        }
+        weighted += sum * twice;
+        area += twice;
+    }
+    out.mean = if area > 0.0 { weighted / area } else { 0.0 };
+    out
+}
+
+/// Directions searched around the points with the largest distances.
+const DIRECTIONS: usize = 96;
+/// Steps along each direction, out to the distance known so far.
+const STEPS: usize = 12;
+/// At most this many points are searched around (the search is about a thousand
+/// evaluations a point).
+const REFINE_LIMIT: usize = 50_000;
+
+/// Tightens the largest distances. The gradient line is not the shortest way to the
+/// surface near a crease (two surfaces meeting at an angle): a point just inside a sharp
+/// edge looks along one surface's gradient and misses the other surface beside it. Every
+/// distance found is an upper bound (a point of the surface that far away was found), so
+/// the points are taken largest first and searched around in many directions for a nearer
+/// sign change; once the largest distance left is one already searched, it is the
+/// maximum.
+fn refine_largest(field: &ClippedField, points: &[[f64; 3]], found: &mut [(f64, bool)]) {
+    use std::cmp::Ordering;
+    use std::collections::BinaryHeap;
+    #[derive(PartialEq)]
+    struct Item(f64, usize, bool);
+    impl Eq for Item {}
+    impl PartialOrd for Item {
+        fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+            Some(self.cmp(other))
+        }
+    }
+    impl Ord for Item {
+        fn cmp(&self, other: &Self) -> Ordering {
+            self.0.total_cmp(&other.0)
+        }
+    }
+    // Directions spread evenly over the sphere (a Fibonacci lattice).
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let dirs: Vec<DVec3> = (0..DIRECTIONS)
+        .map(|i| {
+            let z = 1.0 - (2 * i + 1) as f64 / DIRECTIONS as f64;
+            let r = (1.0 - z * z).sqrt();
+            let a = golden * i as f64;
+            DVec3::new(r * a.cos(), r * a.sin(), z)
+        })
+        .collect();
+    let mut heap: BinaryHeap<Item> = found
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| d.0 > 0.0 && d.0.is_finite())
+        .map(|(i, d)| Item(d.0, i, false))
+        .collect();
+    let mut batch = BatchEval::new();
+    let (mut xs, mut ys, mut zs, mut f) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut searched = 0;
+    while let Some(Item(d, i, done)) = heap.pop() {
+        if done || searched == REFINE_LIMIT {
+            break;
+        }
+        searched += 1;
+        let p = DVec3::from(points[i]);
+        let mut v = [0.0];
+        field.batch(&mut batch, &[p.x], &[p.y], &[p.z], &mut v);
+        let inside = v[0] < 0.0;
+        let mut sample = |qs: &mut dyn Iterator<Item = DVec3>, f: &mut Vec<f64>| {
+            xs.clear();
+            ys.clear();
+            zs.clear();
+            for q in qs {
+                xs.push(q.x);
+                ys.push(q.y);
+                zs.push(q.z);
+            }
+            f.clear();
+            f.resize(xs.len(), 0.0);
+            field.batch(&mut batch, &xs, &ys, &zs, f);
+        };
+        sample(
+            &mut dirs
+                .iter()
+                .flat_map(|&u| (1..=STEPS).map(move |k| p + u * (d * k as f64 / STEPS as f64))),
+            &mut f,
+        );
+        // Per direction, the first step past a sign change: a bracket to bisect.
+        let mut brackets: Vec<(DVec3, f64, f64)> = Vec::new();
+        for (j, &u) in dirs.iter().enumerate() {
+            if let Some(k) = (0..STEPS).find(|&k| (f[j * STEPS + k] < 0.0) != inside) {
+                let step = d / STEPS as f64;
+                brackets.push((u, step * k as f64, step * (k + 1) as f64));
+            }
+        }
+        for _ in 0..BISECTIONS / 2 {
+            let mids: Vec<DVec3> = brackets
+                .iter()
+                .map(|&(u, lo, hi)| p + u * (0.5 * (lo + hi)))
+                .collect();
+            sample(&mut mids.into_iter(), &mut f);
+            for (b, &v) in brackets.iter_mut().zip(f.iter()) {
+                let mid = 0.5 * (b.1 + b.2);
+                if (v < 0.0) != inside {
+                    b.2 = mid;
+                } else {
+                    b.1 = mid;
+                }
+            }
+        }
+        let nearer = brackets.iter().map(|b| b.2).fold(d, f64::min);
+        found[i] = (nearer, found[i].1 && nearer >= d);
+        heap.push(Item(nearer, i, true));
+    }
+}
+
+/// The distance to the surface of each point, and whether it is the first-order estimate.
+fn distances(field: &ClippedField, points: &[[f64; 3]]) -> Vec<(f64, bool)> {
+    let mut grad = GradEval::new();
+    let mut batch = BatchEval::new();
+    let n = points.len();
+    // Per point: the direction towards the surface and the first-order distance.
+    let mut dir = vec![DVec3::ZERO; n];
+    let mut first = vec![0.0; n];
+    let mut out = vec![(0.0, false); n];
+    let mut sign0 = vec![false; n];
+    let mut todo: Vec<usize> = Vec::with_capacity(n);
+    for (i, p) in points.iter().enumerate() {
+        let g = field.grad(&mut grad, *p);
+        sign0[i] = g.v < 0.0;
+        let slope = DVec3::from(g.d).length();
+        if g.v == 0.0 {
+            continue;
+        }
+        if !g.v.is_finite() || slope.is_nan() || slope <= 0.0 || !slope.is_finite() {
+            // No direction to search in: report what can be said.
+            out[i] = (
+                if g.v.is_finite() {
+                    g.v.abs()
+                } else {
+                    f64::INFINITY
+                },
+                true,
+            );
+            continue;
+        }
+        first[i] = g.v.abs() / slope;
+        dir[i] = DVec3::from(g.d) / slope * -g.v.signum();
+        todo.push(i);
+    }
+    // Bracket: the first search step where F changes sign.
+    let (mut xs, mut ys, mut zs, mut f) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut eval = |idx: &[usize], at: &dyn Fn(usize) -> DVec3, f: &mut Vec<f64>| {
+        xs.clear();
+        ys.clear();
+        zs.clear();
+        for &i in idx {
+            let q = at(i);
+            xs.push(q.x);
+            ys.push(q.y);
+            zs.push(q.z);
+        }
+        f.clear();
+        f.resize(idx.len(), 0.0);
+        field.batch(&mut batch, &xs, &ys, &zs, f);
+    };
+    let mut lo = vec![0.0; n];
+    let mut hi = vec![f64::NAN; n];
+    let mut open = todo.clone();
+    for &k in &SEARCH {
+        if open.is_empty() {
+            break;
+        }
+        eval(
+            &open,
+            &|i| DVec3::from(points[i]) + dir[i] * (first[i] * k),
+            &mut f,
+        );
+        let mut still = Vec::new();
+        for (j, &i) in open.iter().enumerate() {
+            if (f[j] < 0.0) != sign0[i] {
+                hi[i] = first[i] * k;
+            } else {
+                lo[i] = first[i] * k;
+                still.push(i);
+            }
+        }
+        open = still;
+    }
+    for &i in &open {
+        out[i] = (first[i], true);
+    }
+    let bracketed: Vec<usize> = todo.into_iter().filter(|&i| hi[i].is_finite()).collect();
+    for _ in 0..BISECTIONS {
+        eval(
+            &bracketed,
+            &|i| DVec3::from(points[i]) + dir[i] * (0.5 * (lo[i] + hi[i])),
+            &mut f,
+        );
+        for (j, &i) in bracketed.iter().enumerate() {
+            let mid = 0.5 * (lo[i] + hi[i]);
+            if (f[j] < 0.0) != sign0[i] {
+                hi[i] = mid;
+            } else {
+                lo[i] = mid;
+            }
+        }
+    }
+    for &i in &bracketed {
+        out[i] = (0.5 * (lo[i] + hi[i]), false);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::samples;
+    use isoforge_field::{Bounds, Shape};
+
+    #[test]
+    fn a_cube_on_its_own_faces_is_at_zero() {
+        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+        // max(|x|, |y|, |z|) − 1: the cube [-1, 1]³.
+        let cube = x.abs().max(&y.abs()).max(&z.abs()) - 1.0;
+        let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
+        let mesh = samples::cuboid([-1.0; 3], [1.0; 3]);
+        let d = deviation(&mesh, &ClippedField::new(&cube, region));
+        assert!(d.max < 1e-6, "{d:?}");
+    }
+
+    #[test]
+    fn near_a_crease_the_nearer_surface_counts() {
+        // max(x − 1, 10 (y − 1)): inside, near the edge x = y = 1. At (0.95, 0.99, 0) the
+        // x branch is the larger (−0.05 against −0.1), so its gradient points along x, 0.05
+        // to its face; but the face y = 1 is only 0.01 away.
+        let (x, y) = (Shape::x(), Shape::y());
+        let wedge = (x - 1.0).max(&((y - 1.0) * 10.0));
+        let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
+        let mesh = Mesh {
+            vertices: vec![
+                [0.95, 0.99, 0.0],
+                [0.9501, 0.99, 0.0],
+                [0.95, 0.9901, 0.0001],
+            ],
+            triangles: vec![[0, 1, 2]],
+        };
+        let d = deviation(&mesh, &ClippedField::new(&wedge, region));
+        assert!((d.max - 0.01).abs() < 2e-4, "{d:?}");
+    }
+
+    #[test]
+    fn a_sphere_inscribed_polyhedron_deviates_by_its_sagitta() {
+        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+        let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
+        let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
+        // An octahedron with corners on the unit sphere: its face centres are at 1/√3.
+        let mesh = Mesh {
+            vertices: vec![
+                [1.0, 0.0, 0.0],
+                [-1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, -1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [0.0, 0.0, -1.0],
+            ],
+            triangles: vec![
+                [0, 2, 4],
+                [2, 1, 4],
+                [1, 3, 4],
+                [3, 0, 4],
+                [2, 0, 5],
+                [1, 2, 5],
+                [3, 1, 5],
+                [0, 3, 5],
+            ],
+        };
+        let d = deviation(&mesh, &ClippedField::new(&ball, region));
+        let expected = 1.0 - 1.0 / 3f64.sqrt();
+        assert!((d.max - expected).abs() < 1e-6, "{d:?}");
+        assert!(d.mean > 0.0 && d.mean < d.max);
+        assert_eq!(d.samples, 56);
+        assert_eq!(d.estimated, 0);
+    }
+}
