@@ -87,9 +87,11 @@ fn closed_volume(path: &Path, depth: u8) -> f64 {
         (0, 0, 0),
         "{name} at depth {depth}: ADMesh finds open, degenerate or reversed facets"
     );
-    // ADMesh sums in f32 (off by 1.6e-4 on the 100 mm tetrahedron hull): agree to 1e-3.
+    // ADMesh sums in f32, and its error grows with the triangle count: on the 100 mm
+    // tetrahedron hull 1.6e-4 at depth 6 (47,580 triangles), 1.2e-3 at depth 8 (755,196).
+    // Agree to 0.5%, the volume tolerance.
     assert!(
-        ((volume - report.volume) / report.volume).abs() < 1e-3,
+        ((volume - report.volume) / report.volume).abs() < 5e-3,
         "{name} at depth {depth}: ADMesh's volume {volume}, ours {}",
         report.volume
     );

@@ -174,3 +174,36 @@ fn ranges_are_refused_where_they_mean_nothing() {
     }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
+
+#[test]
+fn a_frame_that_fails_leaves_no_frames_and_no_gif() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("breaks.rhai");
+    std::fs::write(
+        &model,
+        "let t = param(\"t\", 0, 0, 1);\nif t > 0.6 { throw \"t too large\" }\nsphere(1 + t)",
+    )
+    .unwrap();
+    let frames = dir.path().join("frames");
+    let gif = dir.path().join("a.gif");
+    let run = isoforge(&[
+        "render",
+        &model.display().to_string(),
+        "--param",
+        "t=0..1:3",
+        "--frames",
+        &frames.display().to_string(),
+        "--gif",
+        &gif.display().to_string(),
+        "--size",
+        "16x16",
+    ]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    // The third frame (t = 1) names itself and the script's line.
+    assert!(err.contains("frame 2 (t=1)"), "{err}");
+    assert!(err.contains("breaks.rhai:2:"), "{err}");
+    assert!(!frames.exists() && !gif.exists(), "partial output left");
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(left.len(), 1, "{left:?}");
+}

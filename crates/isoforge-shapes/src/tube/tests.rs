@@ -76,7 +76,8 @@ fn theta_joins_up_round_a_closed_curve() {
     let mut pe = PointEval::new();
     let mut c = |s: f64| tube.curve.point(&mut pe, s);
     // Points a fixed offset from the curve on either side of the seam.
-    let (t, r, _) = tube.frame(1e-4, 0);
+    let (_, d1) = tube.curve.with_derivative(1e-4);
+    let (t, r, _) = tube.frame(d1, 0, 1e-4);
     for k in 0..8 {
         let a = k as f64 * TAU / 8.0;
         let off = (r * a.cos() + t.cross(r) * a.sin()) * 0.3;
