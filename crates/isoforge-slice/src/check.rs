@@ -149,13 +149,9 @@ pub fn parse(text: &str) -> Result<GcodeReport, CheckError> {
             }
             Effect::Heat {
                 heater: Heater::Bed,
-                target,
+                target: Some(v),
                 ..
-            } => {
-                if let Some(v) = target {
-                    bed = Some(v);
-                }
-            }
+            } => bed = Some(v),
             _ => {}
         }
     }
