@@ -5,6 +5,7 @@
 
 mod bad_scripts;
 mod check;
+mod dialects;
 mod help;
 mod info;
 mod mesh;

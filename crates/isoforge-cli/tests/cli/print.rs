@@ -253,6 +253,58 @@ fn sigterm_cancels_cleanly() {
 }
 
 /// Sends `signal` to a running `print` and checks it cancelled the job properly.
+#[test]
+fn sighup_cancels_cleanly() {
+    signal_cancels_cleanly("-HUP");
+}
+
+#[test]
+fn a_file_with_cr_only_line_endings_prints() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode_path = dir.path().join("old-mac.gcode");
+    std::fs::write(&gcode_path, "G28\rG90\rG1 X10 Y10 F3000\rG1 X20\r").unwrap();
+    let log = dir.path().join("executed.tsv");
+    let fake = FakeProcess::start_with(&[], &log);
+    let out = isoforge(&[
+        "print",
+        gcode_path.to_str().unwrap(),
+        "--port",
+        &fake.port,
+        "--no-journal",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    fake.wait_exit();
+    assert_eq!(
+        logged_job(&log),
+        ["G28", "G90", "G1 X10 Y10 F3000", "G1 X20"]
+    );
+}
+
+#[test]
+fn a_10_mb_line_is_not_echoed_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode_path = dir.path().join("huge.gcode");
+    let mut text = String::from("G28\nG1 X");
+    text.push_str(&"1".repeat(10_000_000));
+    text.push('\n');
+    std::fs::write(&gcode_path, text).unwrap();
+    let out = isoforge(&[
+        "print",
+        gcode_path.to_str().unwrap(),
+        "--port",
+        "/dev/null",
+        "--no-journal",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("line 2"), "{stderr}");
+    assert!(stderr.len() < 2_000, "{} bytes of error", stderr.len());
+}
+
 fn signal_cancels_cleanly(signal: &str) {
     let dir = tempfile::tempdir().unwrap();
     let gcode_path = dir.path().join("vase.gcode");
