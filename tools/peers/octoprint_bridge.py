@@ -11,7 +11,7 @@ It runs until the host closes the port (or a SIGTERM), then writes --log and --s
 Options set the simulator's own settings (see octoprint/plugins/virtual_printer/__init__.py in
 the installed package): --simulated-errors (e.g. 100:resend,110:missing_lineno), --send-busy,
 --rx-buffer, --command-buffer, --ok-format. --flip-every N damages one bit in every Nth line on
-its way to the simulator (the line noise of a bad USB cable).
+its way to the simulator (the line noise of a bad USB cable); --busy-every N adds busy reports.
 """
 
 import argparse
@@ -117,6 +117,13 @@ def main():
     parser.add_argument("--ok-format", default="ok")
     parser.add_argument("--flip-every", type=int, default=0)
     parser.add_argument(
+        "--busy-every",
+        type=int,
+        default=0,
+        help="also report `echo:busy: processing` to the host after every Nth line (the "
+        "simulator itself only says busy during waits, which a fast test pins away)",
+    )
+    parser.add_argument(
         "--instant-moves",
         action="store_true",
         help="moves take no time (the simulator otherwise sleeps a tenth of each move's "
@@ -175,6 +182,12 @@ def main():
                 if args.flip_every and counters["lines_in"] % args.flip_every == 0:
                     line, flipped = flip_one_bit(line)
                     counters["flipped"] += int(flipped)
+                if args.busy_every and counters["lines_in"] % args.busy_every == 0:
+                    counters["busy"] = counters.get("busy", 0) + 1
+                    try:
+                        os.write(master, b"echo:busy: processing\n")
+                    except OSError:
+                        break
                 rest = line + b"\n"
                 while rest and not stop.is_set():
                     # The simulator takes what fits its receive buffer and says how much.

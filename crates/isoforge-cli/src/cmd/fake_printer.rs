@@ -128,7 +128,7 @@ pub fn run(args: FakePrinterArgs, global: &Global) -> Result<ExitCode> {
 
 /// The fake printer has no input file, so it cannot see that `--log` names the G-code a host
 /// is printing. It refuses instead to replace a file that is not one of its own logs: a
-/// non-empty regular file whose first line is not `LINE<TAB>COMMAND`.
+/// non-empty regular file whose first line is neither `LINE<TAB>COMMAND` nor `# faults ...`.
 fn refuse_foreign_log(path: &Path) -> Result<()> {
     // Only regular files: opening a FIFO to look would wait for a writer.
     let is_file = std::fs::metadata(path).is_ok_and(|m| m.is_file());
@@ -145,6 +145,8 @@ fn refuse_foreign_log(path: &Path) -> Result<()> {
     let ours = line
         .split_once('\t')
         .is_some_and(|(n, _)| n == "-" || (!n.is_empty() && n.bytes().all(|b| b.is_ascii_digit())));
+    // A log of a session that executed nothing holds only its `# faults` line.
+    let ours = ours || line.starts_with("# faults");
     if first.is_empty() || ours {
         return Ok(());
     }

@@ -8,6 +8,7 @@ mod check;
 mod dialects;
 mod help;
 mod info;
+mod interop;
 mod mesh;
 mod outputs;
 mod print;
