@@ -92,6 +92,18 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
         .with_context(|| format!("{}: cannot read", args.file.display()))?;
     let program = gcode::parse(&String::from_utf8_lossy(&bytes))
         .with_context(|| format!("{}", args.file.display()))?;
+    if !global.quiet {
+        // The host owns line numbering: an M110 of the file is left out, and said so.
+        for d in &program.dropped {
+            eprintln!(
+                "warning: {}: line {}: `{}` not sent: {}",
+                args.file.display(),
+                d.line,
+                d.text,
+                d.why
+            );
+        }
+    }
     let fingerprint = journal::fingerprint(&bytes);
     let journal_path = args
         .journal

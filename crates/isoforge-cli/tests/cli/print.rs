@@ -253,6 +253,45 @@ fn sigterm_cancels_cleanly() {
 }
 
 /// Sends `signal` to a running `print` and checks it cancelled the job properly.
+/// Issue 9, item 1: an `M110` in the file would reset the printer's line count mid-job (a
+/// runaway relative move, a hang, a move run twice, a misleading error). The host owns the
+/// numbering: every such line is left out with a warning, and the rest runs once, in order.
+#[test]
+fn m110_in_a_file_is_left_out_with_a_warning() {
+    let cases = [
+        "G28\nG91\nG1 X1\nM110 N1\nG1 X2\nG1 X3\nG90\n",
+        "G28\nG1 X1\nG1 X2\nM110 N100\nG1 X3\nG1 X4\n",
+        "G28\nM110 N2\nG1 X1\nG1 X2\n",
+        "M110 N0\nG28\nG1 X1\n",
+    ];
+    for text in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let gcode_path = dir.path().join("m110.gcode");
+        std::fs::write(&gcode_path, text).unwrap();
+        let log = dir.path().join("executed.tsv");
+        let fake = FakeProcess::start_with(&[], &log);
+        let out = isoforge(&[
+            "print",
+            gcode_path.to_str().unwrap(),
+            "--port",
+            &fake.port,
+            "--no-journal",
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{text:?}: {stderr}");
+        assert!(
+            stderr.contains("warning") && stderr.contains("M110") && stderr.contains("not sent"),
+            "{text:?}: {stderr}"
+        );
+        fake.wait_exit();
+        let want: Vec<&str> = text.lines().filter(|l| !l.starts_with("M110")).collect();
+        assert_eq!(logged_job(&log), want, "{text:?}");
+        // Nothing but the host's own opening M110 reached the printer.
+        let all = std::fs::read_to_string(&log).unwrap();
+        assert_eq!(all.matches("M110").count(), 1, "{all}");
+    }
+}
+
 #[test]
 fn sighup_cancels_cleanly() {
     signal_cancels_cleanly("-HUP");

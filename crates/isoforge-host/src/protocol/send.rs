@@ -281,6 +281,11 @@ impl Protocol {
         };
         let due = match self.watchdog.probe_sent {
             None => silence >= quiet,
+            // The printer answered something after the probe went out, then went quiet: the
+            // probe's own `ok` was taken for another line's (or lost), and waiting out the
+            // whole timeout would stall the job for nothing (it cost 5 s per damaged line on
+            // firmwares that print no `ok` after a refusal). Ask again at the quiet pace.
+            Some(sent) if !long_front && self.watchdog.last_progress > sent => silence >= quiet,
             Some(sent) => now.duration_since(sent) >= limit,
         };
         if !due {
@@ -339,6 +344,12 @@ impl Protocol {
     pub(super) fn watchdog_deadline(&self) -> Instant {
         let long_front = self.window.front().is_some_and(|f| f.long);
         match self.watchdog.probe_sent {
+            Some(sent) if !long_front && self.watchdog.last_progress > sent => {
+                self.watchdog.last_progress
+                    + self
+                        .watchdog
+                        .quiet_after(self.cfg.quiet_floor, self.cfg.timeout, long_front)
+            }
             Some(sent) => {
                 sent + if long_front {
                     self.cfg.long_timeout
