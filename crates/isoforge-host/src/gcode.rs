@@ -1,17 +1,29 @@
 //! Reading a G-code file into the commands a printer executes, and framing them for the wire.
 //!
-//! Comments (`; ...` and `( ... )`) and blank lines never reach the printer; each command keeps
-//! the source line it came from so errors, progress and the journal can point into the file.
-//! Layer starts come from `;LAYER:n` comments when the slicer wrote them, else from the Z
-//! height of the first extruding move at each new height.
+//! Lines are read by `isoforge-gcode` (the tokenizer the slicer's checker and the fake printer
+//! use): comments and blank lines never reach the printer; a line number and checksum the file
+//! may carry are dropped (the host numbers lines itself); each command keeps the source line it
+//! came from so errors, progress and the journal can point into the file. Layer starts come
+//! from `;LAYER:n` comments when the slicer wrote them, else from the height of the first
+//! extruding move at each new Z.
+//!
+//! The host owns line numbering: an `M110` in the file would reset the printer's count in the
+//! middle of the job (a later line could then run twice or never), so it is left out, and the
+//! [`Program`] says which lines were.
 
 use std::path::Path;
 
+use isoforge_gcode::{LayerFinder, Machine, parse_line};
 use thiserror::Error;
+
+pub use isoforge_gcode::Layer;
 
 /// Marlin's `MAX_CMD_SIZE` is 96 bytes including the terminating NUL: anything longer is cut
 /// silently, so a longer framed line must be refused before it is sent.
 pub(crate) const MAX_FRAMED_LEN: usize = 95;
+
+/// Longest piece of a line quoted back in an error, in characters.
+const EXCERPT: usize = 48;
 
 /// One command as the printer will execute it.
 #[derive(Clone, Debug, PartialEq)]
@@ -22,15 +34,15 @@ pub struct Command {
     pub source_line: usize,
 }
 
-/// Where a layer starts in the command list.
+/// A line of the file that is not sent, and why.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Layer {
-    /// The layer's number (from `;LAYER:n`, else counted from 0).
-    pub number: u32,
-    /// Index into [`Program::commands`] of the layer's first command.
-    pub first_command: usize,
-    /// The layer's height, when a Z move for it was seen.
-    pub z: Option<f64>,
+pub struct Dropped {
+    /// 1-based source line.
+    pub line: usize,
+    /// The command.
+    pub text: String,
+    /// Why it is not sent.
+    pub why: &'static str,
 }
 
 /// A G-code file read into commands.
@@ -40,6 +52,8 @@ pub struct Program {
     pub commands: Vec<Command>,
     /// Layer starts, in file order.
     pub layers: Vec<Layer>,
+    /// Commands of the file that are not sent (`M110`).
+    pub dropped: Vec<Dropped>,
 }
 
 /// What is wrong with a G-code file or a line to be framed.
@@ -58,82 +72,60 @@ pub enum GcodeError {
     BadLine {
         /// 1-based source line.
         line: usize,
-        /// What is wrong.
+        /// What is wrong (the column is in it).
         reason: String,
     },
     /// A framed line exceeds Marlin's buffer and would be truncated by the firmware.
     #[error(
-        "line {line}: framed as {framed:?} it is {len} bytes, over Marlin's {MAX_FRAMED_LEN}-byte limit (the firmware would cut it); shorten the command"
+        "line {line}: the command {excerpt:?} is {len} bytes framed for the wire, over Marlin's {MAX_FRAMED_LEN}-byte limit (the firmware would cut it); shorten the command"
     )]
     TooLong {
         /// 1-based source line (0 when the command was not from a file).
         line: usize,
-        /// The framed text.
-        framed: String,
-        /// Its length in bytes.
+        /// The start of the command.
+        excerpt: String,
+        /// The framed length in bytes.
         len: usize,
     },
 }
 
+/// The first [`EXCERPT`] characters of `text`, with `...` when there is more.
+pub(crate) fn excerpt(text: &str) -> String {
+    let mut out: String = text.chars().take(EXCERPT).collect();
+    if text.chars().count() > EXCERPT {
+        out.push_str("...");
+    }
+    out
+}
+
 /// The XOR of every byte, as RepRap firmware computes it over `N<n> <command>`.
+#[cfg(test)]
 pub(crate) fn checksum(bytes: &[u8]) -> u8 {
-    bytes.iter().fold(0, |acc, b| acc ^ b)
+    isoforge_gcode::checksum(bytes)
 }
 
 /// Frames a command as `N<line> <command>*<checksum>` followed by a newline.
 ///
 /// `source_line` is only used to say where a too-long command came from.
 pub fn frame(line: u64, command: &str, source_line: usize) -> Result<String, GcodeError> {
-    let body = format!("N{line} {command}");
-    let cs = checksum(body.as_bytes());
-    let framed = format!("{body}*{cs}");
+    // `N<digits> ` + command + `*<3 digits>`: refuse before building a huge string.
+    let len = command.len() + line.to_string().len() + 2 + 4;
+    if len > MAX_FRAMED_LEN + 2 {
+        return Err(GcodeError::TooLong {
+            line: source_line,
+            excerpt: excerpt(command),
+            len,
+        });
+    }
+    let framed = isoforge_gcode::frame(line, command);
     if framed.len() > MAX_FRAMED_LEN {
         return Err(GcodeError::TooLong {
             line: source_line,
+            excerpt: excerpt(command),
             len: framed.len(),
-            framed,
         });
     }
     Ok(framed + "\n")
-}
-
-/// Removes `;` comments and `( ... )` comments and trims the rest.
-///
-/// Returns `None` for an unterminated `(` comment, which Marlin would also misread.
-pub(crate) fn strip_comments(line: &str) -> Option<String> {
-    let mut out = String::with_capacity(line.len());
-    let mut depth = 0usize;
-    for c in line.chars() {
-        match c {
-            ';' if depth == 0 => break,
-            '(' => depth += 1,
-            ')' if depth > 0 => depth -= 1,
-            _ if depth == 0 => out.push(c),
-            _ => {}
-        }
-    }
-    if depth > 0 {
-        return None;
-    }
-    Some(out.trim().to_string())
-}
-
-/// Drops a line number and checksum a file may already carry (`N12 G1 X1*34`): the host
-/// numbers lines itself, and a stale checksum would be wrong after renumbering.
-fn strip_framing(cmd: &str) -> &str {
-    let mut rest = cmd;
-    if let Some(after) = rest.strip_prefix(['N', 'n']) {
-        let digits = after.bytes().take_while(u8::is_ascii_digit).count();
-        if digits > 0 && after[digits..].starts_with([' ', '\t']) {
-            rest = after[digits..].trim_start();
-        }
-    }
-    if let Some(star) = rest.rfind('*')
-        && rest[star + 1..].bytes().all(|b| b.is_ascii_digit())
-    {
-        rest = rest[..star].trim_end();
-    }
-    rest
 }
 
 /// Reads a G-code file.
@@ -149,49 +141,44 @@ pub fn read_file(path: &Path) -> Result<Program, GcodeError> {
 /// Parses G-code text into commands and layer starts.
 ///
 /// Every command is checked here so that no error can surface halfway through a print: it
-/// must be ASCII without `*` (the checksum marker), and framed with the largest line number
-/// this job can reach it must fit `MAX_FRAMED_LEN` (95 bytes).
+/// must be ASCII text with well-formed words, and framed with the largest line number this
+/// job can reach it must fit `MAX_FRAMED_LEN` (95 bytes).
 pub fn parse(text: &str) -> Result<Program, GcodeError> {
     let mut program = Program::default();
     let mut layers = LayerFinder::default();
-    for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
-        if let Some(number) = layer_comment(raw) {
-            layers.comment(number, program.commands.len());
+    let mut machine = Machine::default();
+    for (n, raw) in isoforge_gcode::lines(text) {
+        let line = parse_line(raw).map_err(|e| GcodeError::BadLine {
+            line: n,
+            reason: e.to_string(),
+        })?;
+        if let Some(comment) = line.comment {
+            layers.comment(comment, program.commands.len());
         }
-        let Some(stripped) = strip_comments(raw) else {
-            return Err(GcodeError::BadLine {
-                line,
-                reason: "a `(` comment is not closed on this line".into(),
-            });
-        };
-        let cmd = strip_framing(&stripped);
-        if cmd.is_empty() {
+        if line.text.is_empty() {
             continue;
         }
-        if let Some(pos) = cmd.find(|c: char| !c.is_ascii() || c.is_ascii_control()) {
-            return Err(GcodeError::BadLine {
-                line,
-                reason: format!(
-                    "byte {} is not plain ASCII text, which the serial protocol cannot carry",
-                    pos + 1
-                ),
-            });
+        if let Some(cmd) = &line.command {
+            if cmd.code.is('M', 110) {
+                program.dropped.push(Dropped {
+                    line: n,
+                    text: excerpt(&line.text),
+                    why: "the host numbers the lines itself; an M110 would reset the \
+                          printer's count in the middle of the job",
+                });
+                continue;
+            }
+            let effect = machine.apply(cmd);
+            layers.command(cmd, &effect, program.commands.len());
         }
-        if cmd.contains('*') {
-            return Err(GcodeError::BadLine {
-                line,
-                reason: "`*` inside a command would be read as the checksum marker".into(),
-            });
-        }
-        layers.command(cmd, program.commands.len());
         program.commands.push(Command {
-            text: cmd.to_string(),
-            source_line: line,
+            text: line.text.into_owned(),
+            source_line: n,
         });
     }
-    // Resumed jobs add a short prelude, so leave room for it in the line-number width.
-    let worst_line = program.commands.len() as u64 + PRELUDE_ALLOWANCE;
+    // Resumed jobs add a short prelude, and the host its own lines (probes, renumbering):
+    // leave room for them in the line-number width.
+    let worst_line = program.commands.len() as u64 * 2 + PRELUDE_ALLOWANCE;
     for c in &program.commands {
         frame(worst_line, &c.text, c.source_line)?;
     }
@@ -215,110 +202,12 @@ impl Program {
     }
 }
 
-/// `;LAYER:12` (Cura, isoforge) or `;LAYER_CHANGE` followed by nothing we can number.
-fn layer_comment(raw: &str) -> Option<u32> {
-    let t = raw.trim_start();
-    let rest = t.strip_prefix(";LAYER:")?;
-    rest.trim().parse().ok()
-}
-
-/// The value of one word (`Z` in `G1 Z0.3 F600`).
-pub(crate) fn word(cmd: &str, letter: char) -> Option<f64> {
-    cmd.split_ascii_whitespace()
-        .skip(1)
-        .find_map(|w| w.strip_prefix(letter).and_then(|v| v.parse().ok()))
-}
-
-/// The command's code (`G1`, `M104`, `T0`), upper-cased, without leading zeros.
+/// The command's code (`G1`, `M104`, `T0`), upper-cased, without leading zeros; empty for
+/// text that is not a G, M or T command.
 pub(crate) fn code(cmd: &str) -> String {
-    let first = cmd.split_ascii_whitespace().next().unwrap_or("");
-    let mut chars = first.chars();
-    let Some(letter) = chars.next() else {
-        return String::new();
-    };
-    let num = chars.as_str();
-    let num = match num.parse::<u32>() {
-        Ok(n) => n.to_string(),
-        Err(_) => num.to_string(),
-    };
-    format!("{}{num}", letter.to_ascii_uppercase())
-}
-
-/// Finds layer starts while commands stream past.
-#[derive(Default)]
-struct LayerFinder {
-    from_comments: Vec<Layer>,
-    from_z: Vec<Layer>,
-    z: Option<f64>,
-    z_move_at: usize,
-    layer_z: Option<f64>,
-    relative: bool,
-    relative_e: bool,
-    e: f64,
-}
-
-impl LayerFinder {
-    fn comment(&mut self, number: u32, next_command: usize) {
-        self.from_comments.push(Layer {
-            number,
-            first_command: next_command,
-            z: None,
-        });
-    }
-
-    fn command(&mut self, cmd: &str, index: usize) {
-        match code(cmd).as_str() {
-            "G90" => (self.relative, self.relative_e) = (false, false),
-            "G91" => (self.relative, self.relative_e) = (true, true),
-            "M82" => self.relative_e = false,
-            "M83" => self.relative_e = true,
-            "G92" => {
-                if let Some(e) = word(cmd, 'E') {
-                    self.e = e;
-                }
-            }
-            "G0" | "G1" => {
-                if let Some(z) = word(cmd, 'Z') {
-                    let z = if self.relative {
-                        self.z.unwrap_or(0.0) + z
-                    } else {
-                        z
-                    };
-                    self.z = Some(z);
-                    self.z_move_at = index;
-                    // A comment-marked layer gets its height from its first Z move.
-                    if let Some(last) = self.from_comments.last_mut()
-                        && last.z.is_none()
-                        && last.first_command <= index
-                    {
-                        last.z = Some(z);
-                    }
-                }
-                if let Some(e) = word(cmd, 'E') {
-                    let extrudes = if self.relative_e { e > 0.0 } else { e > self.e };
-                    self.e = if self.relative_e { self.e + e } else { e };
-                    // A new layer is where extrusion first happens at a new height (z-hops
-                    // move Z without extruding, so they do not count).
-                    if extrudes && self.z.is_some() && self.z != self.layer_z {
-                        self.layer_z = self.z;
-                        self.from_z.push(Layer {
-                            number: self.from_z.len() as u32,
-                            first_command: self.z_move_at.min(index),
-                            z: self.z,
-                        });
-                    }
-                }
-            }
-            _ => {}
-        }
-    }
-
-    fn finish(self) -> Vec<Layer> {
-        if self.from_comments.is_empty() {
-            self.from_z
-        } else {
-            self.from_comments
-        }
+    match isoforge_gcode::Command::parse(cmd) {
+        Ok(Some(c)) => c.code.to_string(),
+        _ => String::new(),
     }
 }
 
@@ -328,7 +217,6 @@ mod tests {
 
     #[test]
     fn checksum_matches_reprap_examples() {
-        // RepRap wiki: "N123 M104 S200" has checksum 68... computed by hand as XOR.
         let body = "N1 G28";
         let expect = body.bytes().fold(0u8, |a, b| a ^ b);
         assert_eq!(checksum(body.as_bytes()), expect);
@@ -353,6 +241,26 @@ mod tests {
     }
 
     #[test]
+    fn m110_in_the_file_is_dropped_and_reported() {
+        let p = parse("M110 N0\nG28\nM110 N100\nG1 X1\nN7 M110*90\n").unwrap();
+        let texts: Vec<_> = p.commands.iter().map(|c| c.text.as_str()).collect();
+        assert_eq!(texts, ["G28", "G1 X1"]);
+        let lines: Vec<_> = p.dropped.iter().map(|d| d.line).collect();
+        assert_eq!(lines, [1, 3, 5]);
+        assert_eq!(p.commands[1].source_line, 4);
+    }
+
+    #[test]
+    fn cr_only_and_crlf_line_endings() {
+        for text in ["G28\rG1 X1\rM84\r", "G28\r\nG1 X1\r\nM84\r\n"] {
+            let p = parse(text).unwrap();
+            let texts: Vec<_> = p.commands.iter().map(|c| c.text.as_str()).collect();
+            assert_eq!(texts, ["G28", "G1 X1", "M84"], "{text:?}");
+            assert_eq!(p.commands[2].source_line, 3);
+        }
+    }
+
+    #[test]
     fn too_long_and_bad_lines_are_errors_with_line_numbers() {
         let long = format!("G28\nM117 {}\n", "A".repeat(100));
         let err = parse(&long).unwrap_err().to_string();
@@ -363,6 +271,18 @@ mod tests {
         assert!(err.contains("line 1"), "{err}");
         let err = parse("M117 h\u{e9}llo\n").unwrap_err().to_string();
         assert!(err.contains("ASCII"), "{err}");
+        let err = parse("G1 Xabc\n").unwrap_err().to_string();
+        assert!(err.contains("line 1") && err.contains("column 4"), "{err}");
+    }
+
+    #[test]
+    fn a_huge_line_is_not_quoted_whole() {
+        let huge = format!("M117 {}\n", "x".repeat(10_000_000));
+        let err = parse(&huge).unwrap_err().to_string();
+        assert!(err.len() < 300, "{} bytes", err.len());
+        let huge = format!("G1 X{}\n", "y".repeat(10_000_000));
+        let err = parse(&huge).unwrap_err().to_string();
+        assert!(err.len() < 300, "{} bytes", err.len());
     }
 
     #[test]
@@ -393,15 +313,13 @@ mod tests {
         let p = parse(g).unwrap();
         let zs: Vec<_> = p.layers.iter().map(|l| (l.z, l.first_command)).collect();
         assert_eq!(zs, [(Some(0.2), 2), (Some(0.4), 8)]);
-        assert_eq!(p.layers[1].first_command, 8);
     }
 
     #[test]
-    fn codes_and_words() {
+    fn codes() {
         assert_eq!(code("g01 X1"), "G1");
         assert_eq!(code("M104 S200"), "M104");
         assert_eq!(code("T1"), "T1");
-        assert_eq!(word("G1 X1.5 Z-2", 'Z'), Some(-2.0));
-        assert_eq!(word("G1 X1.5", 'Z'), None);
+        assert_eq!(code("X10"), "");
     }
 }

@@ -457,6 +457,7 @@ fn same_state(a: &MachineState, b: &MachineState) -> bool {
         && close(a.e, b.e)
         && close_opt(a.feedrate, b.feedrate)
         && close(a.fan, b.fan)
+        && a.inches == b.inches
 }
 
 fn invalid(field: &str, value: String, expected: String) -> InvalidValue {
@@ -735,6 +736,10 @@ fn prelude_for(state: &MachineState) -> (Vec<String>, Vec<String>) {
         cmds.push(format!("T{}", state.tool));
         words.push(format!("select tool {}", state.tool));
     }
+    if state.inches {
+        // Positions and feeds are restored in millimetres, then the file's inches return.
+        cmds.push("G21".into());
+    }
     if let Some(z) = state.z {
         // After a reset the firmware no longer knows Z, but the axis has not moved: declare
         // it, lift clear of the part, and home only X and Y (homing Z would hit the print).
@@ -781,6 +786,10 @@ fn prelude_for(state: &MachineState) -> (Vec<String>, Vec<String>) {
     if state.fan > 0.0 {
         cmds.push(format!("M106 S{}", num(state.fan)));
         words.push(format!("fan at {}", num(state.fan)));
+    }
+    if state.inches {
+        cmds.push("G20".into());
+        words.push("inch units again (G20)".into());
     }
     (cmds, words)
 }

@@ -16,6 +16,7 @@
 //! # Ok(()) }
 //! ```
 
+pub mod dialect;
 pub mod fake;
 pub mod gcode;
 pub mod journal;

@@ -28,8 +28,10 @@ pub struct Sim {
     rng: Rng,
     /// Largest chunk of bytes the link moves at once (1 = byte by byte).
     pub chunk: usize,
-    /// Everything that crossed the link, for failure messages.
+    /// The last things that crossed the link, for failure messages.
     pub trace: VecDeque<String>,
+    /// How many trace lines to keep.
+    pub trace_len: usize,
 }
 
 pub fn commands(texts: &[String]) -> Vec<Command> {
@@ -57,6 +59,7 @@ impl Sim {
             rng: Rng::new(seed),
             chunk: 64,
             trace: VecDeque::new(),
+            trace_len: 60,
         }
     }
 
@@ -69,12 +72,21 @@ impl Sim {
                     Output::Send(s) => {
                         self.to_fw.extend(s.as_bytes());
                         self.log(format!("{:?} > {}", self.now, s.trim_end()));
+                        if std::env::var_os("SIM_DESCRIBE").is_some() {
+                            let d = self.proto.describe();
+                            self.log(format!("    {d}"));
+                        }
                         self.sent.push(s);
                     }
                     Output::Event(Event::Finished { cancelled }) => {
                         return Outcome::Finished { cancelled };
                     }
-                    Output::Event(e) => self.events.push(e),
+                    Output::Event(e) => {
+                        if !matches!(e, Event::Progress { .. } | Event::Temperatures(_)) {
+                            self.log(format!("{:?} ! {e:?}", self.now));
+                        }
+                        self.events.push(e)
+                    }
                     Output::Failed(e) => return Outcome::Failed(e),
                 }
             }
@@ -117,7 +129,7 @@ impl Sim {
     }
 
     fn log(&mut self, s: String) {
-        if self.trace.len() > 60 {
+        if self.trace.len() > self.trace_len {
             self.trace.pop_front();
         }
         self.trace.push_back(s);
@@ -129,11 +141,12 @@ impl Sim {
     }
 }
 
-/// Numbered, non-M110 commands of an executed record.
+/// Numbered commands of an executed record, without the host's own (M110 renumbering,
+/// M105 probes: the sim's jobs have neither).
 pub fn job_commands(record: &[Executed]) -> Vec<String> {
     record
         .iter()
-        .filter(|e| e.line.is_some() && !e.command.starts_with("M110"))
+        .filter(|e| e.line.is_some() && !e.command.starts_with("M110") && e.command != "M105")
         .map(|e| e.command.clone())
         .collect()
 }

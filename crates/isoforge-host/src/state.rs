@@ -1,9 +1,12 @@
-//! The printer state a job has built up: heater targets, positioning modes, position, fan.
+//! The printer state a job has built up, as the journal records it: heater targets,
+//! positioning modes, units, position, fan.
 //!
-//! Tracked command by command as lines are acknowledged, so the journal can say what a
-//! resumed job must restore, and recomputed from the file for `--from-layer`.
+//! The state itself is `isoforge-gcode`'s machine model (the same one the slicer's checker
+//! and the fake printer follow), tracked command by command as lines are acknowledged, so
+//! the journal can say what a resumed job must restore, and recomputed from the file for
+//! `--from-layer`.
 
-use crate::gcode::{code, word};
+use isoforge_gcode::{Command, Machine, Units};
 
 /// What a resumed job must restore. Field names are the journal's keys.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -31,6 +34,10 @@ pub struct MachineState {
     pub feedrate: Option<f64>,
     /// Part-cooling fan, 0-255.
     pub fan: f64,
+    /// G20 (true) or G21: the units of the file's coordinates (journals written before this
+    /// key existed are millimetres).
+    #[serde(default)]
+    pub inches: bool,
 }
 
 impl Default for MachineState {
@@ -47,108 +54,64 @@ impl Default for MachineState {
             e: 0.0,
             feedrate: None,
             fan: 0.0,
+            inches: false,
         }
     }
 }
 
 impl MachineState {
-    /// The state after `commands` ran from power-on.
-    pub(crate) fn replay<'a>(commands: impl IntoIterator<Item = &'a str>) -> MachineState {
-        let mut s = MachineState::default();
-        for c in commands {
-            s.apply(c);
+    /// The state a machine model is in.
+    pub(crate) fn of(m: &Machine) -> MachineState {
+        MachineState {
+            hotends: m.hotends.clone(),
+            bed: m.bed,
+            tool: m.tool,
+            absolute: m.absolute,
+            absolute_e: m.absolute_e,
+            x: m.position[0],
+            y: m.position[1],
+            z: m.position[2],
+            e: m.e,
+            feedrate: m.feedrate,
+            fan: m.fan,
+            inches: m.units == Units::Inches,
         }
-        s
     }
 
-    /// Updates the state for one executed command.
-    pub(crate) fn apply(&mut self, cmd: &str) {
-        let c = code(cmd);
-        match c.as_str() {
-            "G0" | "G1" | "G2" | "G3" => {
-                let abs = self.absolute;
-                for (letter, axis) in [('X', &mut self.x), ('Y', &mut self.y), ('Z', &mut self.z)] {
-                    if let Some(v) = word(cmd, letter) {
-                        *axis = Some(if abs { v } else { axis.unwrap_or(0.0) + v });
-                    }
-                }
-                if let Some(e) = word(cmd, 'E') {
-                    self.e = if self.absolute_e { e } else { self.e + e };
-                }
-                if let Some(f) = word(cmd, 'F') {
-                    self.feedrate = Some(f);
-                }
-            }
-            // Marlin's G90/G91 set every axis, the extruder included; M82/M83 then
-            // override the extruder alone.
-            "G90" => (self.absolute, self.absolute_e) = (true, true),
-            "G91" => (self.absolute, self.absolute_e) = (false, false),
-            "M82" => self.absolute_e = true,
-            "M83" => self.absolute_e = false,
-            "G92" => {
-                let mut any = false;
-                for (letter, axis) in [('X', &mut self.x), ('Y', &mut self.y), ('Z', &mut self.z)] {
-                    if let Some(v) = word(cmd, letter) {
-                        *axis = Some(v);
-                        any = true;
-                    }
-                }
-                if let Some(e) = word(cmd, 'E') {
-                    self.e = e;
-                    any = true;
-                }
-                if !any {
-                    (self.x, self.y, self.z, self.e) = (Some(0.0), Some(0.0), Some(0.0), 0.0);
-                }
-            }
-            "G28" => {
-                let named: Vec<char> = ['X', 'Y', 'Z']
-                    .into_iter()
-                    .filter(|l| {
-                        cmd.split_ascii_whitespace()
-                            .skip(1)
-                            .any(|w| w.starts_with(*l))
-                    })
-                    .collect();
-                let all = named.is_empty();
-                if all || named.contains(&'X') {
-                    self.x = Some(0.0);
-                }
-                if all || named.contains(&'Y') {
-                    self.y = Some(0.0);
-                }
-                if all || named.contains(&'Z') {
-                    self.z = Some(0.0);
-                }
-            }
-            "M104" | "M109" => {
-                let tool = word(cmd, 'T')
-                    .map_or(self.tool, |t| t.max(0.0) as usize)
-                    .min(7);
-                if let Some(s) = word(cmd, 'S').or_else(|| word(cmd, 'R')) {
-                    if self.hotends.len() <= tool {
-                        self.hotends.resize(tool + 1, 0.0);
-                    }
-                    self.hotends[tool] = s;
-                }
-            }
-            "M140" | "M190" => {
-                if let Some(s) = word(cmd, 'S').or_else(|| word(cmd, 'R')) {
-                    self.bed = s;
-                }
-            }
-            "M106" => self.fan = word(cmd, 'S').unwrap_or(255.0),
-            "M107" => self.fan = 0.0,
-            t if t.starts_with('T') => {
-                if let Ok(n) = t[1..].parse::<usize>() {
-                    self.tool = n.min(7);
-                    if self.hotends.len() <= self.tool {
-                        self.hotends.resize(self.tool + 1, 0.0);
-                    }
-                }
-            }
-            _ => {}
+    /// A machine model in this state.
+    pub(crate) fn machine(&self) -> Machine {
+        Machine {
+            units: if self.inches {
+                Units::Inches
+            } else {
+                Units::Millimeters
+            },
+            absolute: self.absolute,
+            absolute_e: self.absolute_e,
+            position: [self.x, self.y, self.z],
+            e: self.e,
+            feedrate: self.feedrate,
+            hotends: self.hotends.clone(),
+            bed: self.bed,
+            fan: self.fan,
+            tool: self.tool,
         }
+    }
+
+    /// The state after `commands` ran from power-on.
+    pub(crate) fn replay<'a>(commands: impl IntoIterator<Item = &'a str>) -> MachineState {
+        let mut m = Machine::default();
+        for c in commands {
+            apply(&mut m, c);
+        }
+        MachineState::of(&m)
+    }
+}
+
+/// Updates `m` for one executed command (text that is not a command changes nothing).
+pub(crate) fn apply(m: &mut Machine, cmd: &str) {
+    if let Ok(Some(c)) = Command::parse(cmd) {
+        m.apply(&c);
     }
 }
 

@@ -14,7 +14,8 @@ use thiserror::Error;
 use crate::gcode::{Command, Program};
 use crate::journal::{Journal, JournalError, JournalRecord, Status};
 use crate::protocol::{Config, Event, Output, Protocol, ProtocolError, Temperatures};
-use crate::state::MachineState;
+use crate::state::{self, MachineState};
+use isoforge_gcode::Machine;
 
 /// Longest the loop blocks in a read, so pause and cancel requests are seen promptly.
 const CONTROL_POLL: Duration = Duration::from_millis(50);
@@ -128,6 +129,10 @@ pub struct Report {
     pub lines_sent: u64,
     /// Resend requests acted on.
     pub resends: u64,
+    /// Numbered `M105` probes sent (each executes once, like any numbered line).
+    pub probes: u64,
+    /// `M110` renumberings after resend episodes.
+    pub renumbers: u64,
     /// Wall time, seconds.
     pub seconds: f64,
     /// Bytes written.
@@ -153,7 +158,7 @@ struct Tracker<'a> {
     prelude: usize,
     /// Job commands applied to `state`.
     applied: usize,
-    state: MachineState,
+    machine: Machine,
     rate: VecDeque<(Instant, usize)>,
     progress: Progress,
 }
@@ -170,16 +175,17 @@ impl<'a> Tracker<'a> {
         if job_executed < self.applied {
             // The printer's counter moved us back: recompute from the file.
             let upto = self.file_executed(job_executed);
-            self.state = MachineState::replay(
+            self.machine = MachineState::replay(
                 self.program.commands[..upto]
                     .iter()
                     .map(|c| c.text.as_str()),
-            );
+            )
+            .machine();
             self.applied = job_executed;
         }
         while self.applied < job_executed {
             if let Some(c) = job.command(self.applied) {
-                self.state.apply(&c.text);
+                state::apply(&mut self.machine, &c.text);
             }
             self.applied += 1;
         }
@@ -195,9 +201,9 @@ impl<'a> Tracker<'a> {
         };
         if let Some(layer) = self.program.layer_of(executed.saturating_sub(1)) {
             p.layer = Some(layer.number);
-            p.z = layer.z.or(self.state.z);
+            p.z = layer.z.or(self.machine.position[2]);
         } else {
-            p.z = self.state.z;
+            p.z = self.machine.position[2];
         }
         self.rate.push_back((now, executed));
         while self.rate.len() > 2
@@ -245,7 +251,7 @@ pub fn stream(
         start: job.start,
         prelude: prelude_len,
         applied: 0,
-        state: MachineState::default(),
+        machine: Machine::default(),
         rate: VecDeque::new(),
         progress: Progress {
             total: job.program.commands.len(),
@@ -253,13 +259,14 @@ pub fn stream(
         },
     };
     // The state the prelude restores is the state at `start`.
-    tracker.state = match &job.journal {
-        Some((_, r)) if r.executed == job.start => r.state.clone(),
+    tracker.machine = match &job.journal {
+        Some((_, r)) if r.executed == job.start => r.state.machine(),
         _ => MachineState::replay(
             job.program.commands[..job.start]
                 .iter()
                 .map(|c| c.text.as_str()),
-        ),
+        )
+        .machine(),
     };
     tracker.advance(0, &proto, started);
     let mut journal = None;
@@ -307,7 +314,7 @@ pub fn stream(
                                     file_exec,
                                     src,
                                     tracker.progress.layer,
-                                    &tracker.state,
+                                    &MachineState::of(&tracker.machine),
                                     now,
                                 ) {
                                     error = Some(err.into());
@@ -386,6 +393,8 @@ pub fn stream(
     Report {
         lines_sent: stats.lines_sent,
         resends: stats.resends,
+        probes: stats.probes,
+        renumbers: stats.renumbers,
         seconds: started.elapsed().as_secs_f64(),
         bytes_sent: stats.bytes_sent,
         completed,

@@ -1,9 +1,11 @@
 //! A G-code checker: parses what the slicer (or anyone) wrote and measures what a printer
 //! would do with it, so tests judge the output and not the slicer's intentions.
 //!
-//! It follows G0/G1/G92/G90/G91/M82/M83 and G28, collects every extruding move with its
-//! layer (from `;LAYER:n`) and feature (`;TYPE:`), the temperatures set before the first
-//! extrusion, and the travel envelope.
+//! It follows moves, G92, G90/G91, M82/M83, G20/G21 and G28 (through `isoforge-gcode`),
+//! collects every extruding move with its layer (from `;LAYER:n`) and feature (`;TYPE:`),
+//! the temperatures set before the first extrusion, and the travel envelope.
+
+use isoforge_gcode::{Effect, Heater, Machine};
 
 /// An extruding move.
 #[derive(Clone, Debug, PartialEq)]
@@ -55,34 +57,31 @@ pub struct CheckError {
     pub message: String,
 }
 
-fn word(line: &str, letter: char) -> Option<&str> {
-    line.split_whitespace()
-        .find(|w| w.starts_with(letter) || w.starts_with(letter.to_ascii_lowercase()))
-        .map(|w| &w[1..])
-}
-
 /// Parses G-code text.
+///
+/// Lines are read by `isoforge-gcode`, the tokenizer and machine state the host and the fake
+/// printer use too, so the checker follows the modes (Marlin's rule that `G90` also makes E
+/// absolute), units and `G01`-style codes exactly as they do.
 pub fn parse(text: &str) -> Result<GcodeReport, CheckError> {
     let mut r = GcodeReport {
         min: [f64::INFINITY; 3],
         max: [f64::NEG_INFINITY; 3],
         ..Default::default()
     };
-    let mut pos = [0.0f64; 3];
-    let mut e = 0.0f64;
-    let (mut abs_xyz, mut abs_e) = (true, true);
+    let mut machine = Machine::default();
     let mut homed_or_moved = false;
     let mut layer: Option<usize> = None;
     let mut feature = String::new();
     let (mut nozzle, mut bed, mut waited) = (None, None, false);
-    for (idx, raw) in text.lines().enumerate() {
-        let n = idx + 1;
-        let (code, comment) = match raw.split_once(';') {
-            Some((c, m)) => (c.trim(), Some(m.trim())),
-            None => (raw.trim(), None),
-        };
-        if code.is_empty() {
-            if let Some(m) = comment {
+    for (n, raw) in isoforge_gcode::lines(text) {
+        let line = isoforge_gcode::parse_line(raw).map_err(|e| CheckError {
+            line: n,
+            message: e.to_string(),
+        })?;
+        let Some(cmd) = &line.command else {
+            if line.text.is_empty()
+                && let Some(m) = line.comment
+            {
                 if let Some(v) = m.strip_prefix("LAYER:") {
                     let k = v.trim().parse().map_err(|_| CheckError {
                         line: n,
@@ -99,35 +98,10 @@ pub fn parse(text: &str) -> Result<GcodeReport, CheckError> {
                 }
             }
             continue;
-        }
-        let num = |c: char| -> Result<Option<f64>, CheckError> {
-            match word(code, c) {
-                None => Ok(None),
-                Some(v) => v.parse::<f64>().map(Some).map_err(|_| CheckError {
-                    line: n,
-                    message: format!("{c}{v} is not a number"),
-                }),
-            }
         };
-        let cmd = code
-            .split_whitespace()
-            .next()
-            .unwrap_or("")
-            .to_ascii_uppercase();
-        match cmd.as_str() {
-            "G0" | "G1" => {
-                let mut to = pos;
-                for (k, c) in ['X', 'Y', 'Z'].into_iter().enumerate() {
-                    if let Some(v) = num(c)? {
-                        to[k] = if abs_xyz { v } else { pos[k] + v };
-                    }
-                }
-                let de = match num('E')? {
-                    Some(v) if abs_e => v - e,
-                    Some(v) => v,
-                    None => 0.0,
-                };
-                e += de;
+        match machine.apply(cmd) {
+            Effect::Move(mv) => {
+                let (pos, to, de) = (mv.from_or_zero(), mv.to_or_zero(), mv.e);
                 let moved = to != pos;
                 if moved {
                     homed_or_moved = true;
@@ -159,39 +133,25 @@ pub fn parse(text: &str) -> Result<GcodeReport, CheckError> {
                         r.max[k] = r.max[k].max(*v);
                     }
                 }
-                pos = to;
             }
-            "G28" => {
-                pos = [0.0; 3];
-                homed_or_moved = true;
-            }
-            "G90" => abs_xyz = true,
-            "G91" => abs_xyz = false,
-            "M82" => abs_e = true,
-            "M83" => abs_e = false,
-            "G92" => {
-                if let Some(v) = num('E')? {
-                    e = v;
-                }
-                for (k, c) in ['X', 'Y', 'Z'].into_iter().enumerate() {
-                    if let Some(v) = num(c)? {
-                        pos[k] = v;
-                    }
-                }
-            }
-            "M104" | "M109" => {
-                if let Some(v) = num('S')? {
+            Effect::Home(_) => homed_or_moved = true,
+            Effect::Heat {
+                heater: Heater::Hotend(_),
+                target,
+                wait,
+            } => {
+                if let Some(v) = target {
                     nozzle = Some(v);
                 }
-                if cmd == "M109" {
+                if wait {
                     waited = true;
                 }
             }
-            "M140" | "M190" => {
-                if let Some(v) = num('S')? {
-                    bed = Some(v);
-                }
-            }
+            Effect::Heat {
+                heater: Heater::Bed,
+                target: Some(v),
+                ..
+            } => bed = Some(v),
             _ => {}
         }
     }
@@ -259,6 +219,16 @@ mod tests {
         assert_eq!(r.layers, vec![(0, Some(0.2))]);
         assert_eq!(r.max[0], 30.0);
         assert_eq!(r.extrusions[0].feature, "FILL");
+    }
+
+    #[test]
+    fn reads_modes_and_codes_as_the_host_does() {
+        // `G90` after `M83` makes E absolute again (Marlin), and `G01` is `G1`.
+        let g = "G28\nM83\nG1 X1 E1\nG90\nG01 X2 E1.5\n";
+        let r = parse(g).unwrap();
+        assert_eq!(r.extrusions.len(), 2);
+        assert!((r.extrusions[1].e - 0.5).abs() < 1e-12);
+        assert!((r.filament_mm - 1.5).abs() < 1e-12);
     }
 
     #[test]

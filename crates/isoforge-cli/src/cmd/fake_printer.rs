@@ -7,6 +7,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use isoforge_host::dialect::Dialect;
 use isoforge_host::fake::{FakeConfig, FakePrinter, Faults, FirmwareConfig};
 
 use crate::common::{Global, usage};
@@ -20,7 +21,11 @@ path on the first line of stdout; point `isoforge print --port PATH` (or any hos
 checks line numbers and checksums as Marlin does, has 4 command slots and a 128-byte receive \
 buffer (bytes beyond it are lost), answers `ok` after executing, heats with `echo:busy: \
 processing` during M109/M190, and reports temperatures (M105, M155). It serves until the host \
-disconnects or a signal (Ctrl-C, SIGTERM, SIGHUP) stops it; the --log file is written then, whole.\n\nExample:\n  isoforge fake-printer --faults corrupt=0.01,drop=0.005,seed=7 --log executed.tsv"
+disconnects or a signal (Ctrl-C, SIGTERM, SIGHUP) stops it; the --log file is written then, whole, \
+ending with a `# faults ...` line counting the faults actually injected. --dialect sets whose words \
+it speaks (banner, error texts, resend and ok forms). With --json the device path goes to stderr \
+(`fake printer on PATH`) and stdout gets one JSON object when it stops: {\"port\", \"dialect\", \
+\"executed\", \"faults\": {counts of each fault injected}}.\n\nExample:\n  isoforge fake-printer --faults corrupt=0.01,drop=0.005,seed=7 --log executed.tsv"
 )]
 pub struct FakePrinterArgs {
     /// Limit the link to this baud rate's byte speed (10 bits a byte); default: no limit.
@@ -38,6 +43,10 @@ pub struct FakePrinterArgs {
     /// written when the printer stops. An existing file that is not such a log is refused.
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
+    /// The firmware whose words it speaks: marlin, prusa, reprapfirmware, repetier, smoothie,
+    /// klipper, octoprint-virtual.
+    #[arg(long, value_name = "NAME", default_value = "marlin")]
+    pub dialect: String,
     /// Real seconds per simulated second of heating (heating runs at 40 °C a second).
     #[arg(long, value_name = "SECONDS", default_value_t = 0.05)]
     pub heat_tick: f64,
@@ -50,8 +59,18 @@ pub fn run(args: FakePrinterArgs, global: &Global) -> Result<ExitCode> {
         None => Faults::default(),
     };
     if !(0.0..=10.0).contains(&args.heat_tick) {
-        anyhow::bail!("--heat-tick {}: expected 0 to 10 seconds", args.heat_tick);
+        return Err(usage(format!(
+            "--heat-tick {}: expected 0 to 10 seconds",
+            args.heat_tick
+        )));
     }
+    let dialect = Dialect::parse(&args.dialect).ok_or_else(|| {
+        usage(format!(
+            "--dialect {:?}: expected one of {}",
+            args.dialect,
+            Dialect::NAMES
+        ))
+    })?;
     if let Some(log) = &args.log {
         refuse_foreign_log(log)?;
     }
@@ -59,6 +78,7 @@ pub fn run(args: FakePrinterArgs, global: &Global) -> Result<ExitCode> {
         firmware: FirmwareConfig {
             faults,
             heat_tick: Duration::from_secs_f64(args.heat_tick),
+            dialect,
             ..FirmwareConfig::default()
         },
         baud: args.baud,
@@ -67,8 +87,13 @@ pub fn run(args: FakePrinterArgs, global: &Global) -> Result<ExitCode> {
     })
     .context("fake printer")?;
     let mut out = std::io::stdout();
-    writeln!(out, "{}", printer.path())?;
-    out.flush()?;
+    if global.json {
+        // stdout holds the one JSON object; the path a host needs goes to stderr.
+        eprintln!("fake printer on {}", printer.path());
+    } else {
+        writeln!(out, "{}", printer.path())?;
+        out.flush()?;
+    }
     if !global.quiet && !global.json {
         eprintln!(
             "fake printer on {}; try: isoforge print FILE.gcode --port {}",
@@ -87,13 +112,23 @@ pub fn run(args: FakePrinterArgs, global: &Global) -> Result<ExitCode> {
             stop.stop();
         }
     }
+    // The printer thread has ended here, so every injected fault is counted.
+    let summary = serde_json::json!({
+        "port": printer.path(),
+        "dialect": args.dialect,
+        "executed": printer.executed().len(),
+        "faults": printer.fault_counts(),
+    });
     printer.wait().context("fake printer")?;
+    if global.json {
+        writeln!(out, "{summary}")?;
+    }
     Ok(ExitCode::SUCCESS)
 }
 
 /// The fake printer has no input file, so it cannot see that `--log` names the G-code a host
 /// is printing. It refuses instead to replace a file that is not one of its own logs: a
-/// non-empty regular file whose first line is not `LINE<TAB>COMMAND`.
+/// non-empty regular file whose first line is neither `LINE<TAB>COMMAND` nor `# faults ...`.
 fn refuse_foreign_log(path: &Path) -> Result<()> {
     // Only regular files: opening a FIFO to look would wait for a writer.
     let is_file = std::fs::metadata(path).is_ok_and(|m| m.is_file());
@@ -110,6 +145,8 @@ fn refuse_foreign_log(path: &Path) -> Result<()> {
     let ours = line
         .split_once('\t')
         .is_some_and(|(n, _)| n == "-" || (!n.is_empty() && n.bytes().all(|b| b.is_ascii_digit())));
+    // A log of a session that executed nothing holds only its `# faults` line.
+    let ours = ours || line.starts_with("# faults");
     if first.is_empty() || ours {
         return Ok(());
     }

@@ -16,7 +16,7 @@ use isoforge_host::streamer::{self, Control, Job, Progress, Update};
 use isoforge_output::{Durability, Options, Streams, check_file};
 use signal_hook::consts::SIGINT;
 
-use crate::common::{Global, print_json};
+use crate::common::{Global, print_json, usage};
 
 /// Arguments of `isoforge print`.
 #[derive(Args, Debug)]
@@ -82,14 +82,29 @@ pub struct PrintArgs {
 
 /// Runs the command.
 pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
+    if !(0.05..=3600.0).contains(&args.timeout) {
+        return Err(usage(format!(
+            "--timeout {}: expected 0.05 to 3600 seconds",
+            args.timeout
+        )));
+    }
     let bytes = std::fs::read(&args.file)
         .with_context(|| format!("{}: cannot read", args.file.display()))?;
     let program = gcode::parse(&String::from_utf8_lossy(&bytes))
         .with_context(|| format!("{}", args.file.display()))?;
-    let fingerprint = journal::fingerprint(&bytes);
-    if !(0.05..=3600.0).contains(&args.timeout) {
-        bail!("--timeout {}: expected 0.05 to 3600 seconds", args.timeout);
+    if !global.quiet {
+        // The host owns line numbering: an M110 of the file is left out, and said so.
+        for d in &program.dropped {
+            eprintln!(
+                "warning: {}: line {}: `{}` not sent: {}",
+                args.file.display(),
+                d.line,
+                d.text,
+                d.why
+            );
+        }
     }
+    let fingerprint = journal::fingerprint(&bytes);
     let journal_path = args
         .journal
         .clone()

@@ -6,8 +6,10 @@
 mod bad_scripts;
 mod browser;
 mod check;
+mod dialects;
 mod help;
 mod info;
+mod interop;
 mod mesh;
 mod outputs;
 mod print;

@@ -65,13 +65,14 @@ impl Drop for FakeProcess {
     }
 }
 
-/// Numbered, non-M110 commands from a `--log` file.
+/// Numbered commands from a `--log` file, without the host's own: `M110` sets the count and
+/// `M105` is its probe, numbered like every line it sends (the test files have neither).
 fn logged_job(log: &Path) -> Vec<String> {
     std::fs::read_to_string(log)
         .expect("log")
         .lines()
         .filter_map(|l| l.split_once('\t'))
-        .filter(|(n, c)| *n != "-" && !c.starts_with("M110"))
+        .filter(|(n, c)| *n != "-" && !c.starts_with("M110") && *c != "M105")
         .map(|(_, c)| c.to_string())
         .collect()
 }
@@ -253,6 +254,97 @@ fn sigterm_cancels_cleanly() {
 }
 
 /// Sends `signal` to a running `print` and checks it cancelled the job properly.
+/// Issue 9, item 1: an `M110` in the file would reset the printer's line count mid-job (a
+/// runaway relative move, a hang, a move run twice, a misleading error). The host owns the
+/// numbering: every such line is left out with a warning, and the rest runs once, in order.
+#[test]
+fn m110_in_a_file_is_left_out_with_a_warning() {
+    let cases = [
+        "G28\nG91\nG1 X1\nM110 N1\nG1 X2\nG1 X3\nG90\n",
+        "G28\nG1 X1\nG1 X2\nM110 N100\nG1 X3\nG1 X4\n",
+        "G28\nM110 N2\nG1 X1\nG1 X2\n",
+        "M110 N0\nG28\nG1 X1\n",
+    ];
+    for text in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let gcode_path = dir.path().join("m110.gcode");
+        std::fs::write(&gcode_path, text).unwrap();
+        let log = dir.path().join("executed.tsv");
+        let fake = FakeProcess::start_with(&[], &log);
+        let out = isoforge(&[
+            "print",
+            gcode_path.to_str().unwrap(),
+            "--port",
+            &fake.port,
+            "--no-journal",
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{text:?}: {stderr}");
+        assert!(
+            stderr.contains("warning") && stderr.contains("M110") && stderr.contains("not sent"),
+            "{text:?}: {stderr}"
+        );
+        fake.wait_exit();
+        let want: Vec<&str> = text.lines().filter(|l| !l.starts_with("M110")).collect();
+        assert_eq!(logged_job(&log), want, "{text:?}");
+        // Nothing but the host's own opening M110 reached the printer.
+        let all = std::fs::read_to_string(&log).unwrap();
+        assert_eq!(all.matches("M110").count(), 1, "{all}");
+    }
+}
+
+#[test]
+fn sighup_cancels_cleanly() {
+    signal_cancels_cleanly("-HUP");
+}
+
+#[test]
+fn a_file_with_cr_only_line_endings_prints() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode_path = dir.path().join("old-mac.gcode");
+    std::fs::write(&gcode_path, "G28\rG90\rG1 X10 Y10 F3000\rG1 X20\r").unwrap();
+    let log = dir.path().join("executed.tsv");
+    let fake = FakeProcess::start_with(&[], &log);
+    let out = isoforge(&[
+        "print",
+        gcode_path.to_str().unwrap(),
+        "--port",
+        &fake.port,
+        "--no-journal",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    fake.wait_exit();
+    assert_eq!(
+        logged_job(&log),
+        ["G28", "G90", "G1 X10 Y10 F3000", "G1 X20"]
+    );
+}
+
+#[test]
+fn a_10_mb_line_is_not_echoed_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode_path = dir.path().join("huge.gcode");
+    let mut text = String::from("G28\nG1 X");
+    text.push_str(&"1".repeat(10_000_000));
+    text.push('\n');
+    std::fs::write(&gcode_path, text).unwrap();
+    let out = isoforge(&[
+        "print",
+        gcode_path.to_str().unwrap(),
+        "--port",
+        "/dev/null",
+        "--no-journal",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("line 2"), "{stderr}");
+    assert!(stderr.len() < 2_000, "{} bytes of error", stderr.len());
+}
+
 fn signal_cancels_cleanly(signal: &str) {
     let dir = tempfile::tempdir().unwrap();
     let gcode_path = dir.path().join("vase.gcode");

@@ -19,7 +19,8 @@ pub struct Faults {
     pub drop_ok: f64,
     /// A good line is refused with `Error:checksum mismatch` and an `ok`, but no `Resend:`.
     pub error: f64,
-    /// After accepting a line, the printer asks for it again (`Resend:` + `ok`) for no reason.
+    /// A good line is refused with a bare request for itself (`Resend:` + `ok`, no error
+    /// line), as OctoPrint's virtual printer does on its `resend` error; it is not taken.
     pub spurious_resend: f64,
     /// After a line error, `Resend:` comes without its `ok`.
     pub no_resend_ok: f64,
@@ -35,6 +36,63 @@ pub struct Faults {
     pub advanced_ok: bool,
     /// Seed of the random source.
     pub seed: u64,
+}
+
+/// How many of each fault the fake printer actually injected, so a test can check that the
+/// fault it asked for happened (a job that succeeds proves little if nothing went wrong).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct FaultCounts {
+    /// Received lines with a byte changed.
+    pub corrupt: u64,
+    /// Replies with a byte replaced by line noise.
+    pub corrupt_reply: u64,
+    /// Received lines lost.
+    pub drop: u64,
+    /// `ok`s not sent.
+    pub drop_ok: u64,
+    /// Refusals sent without their resend request.
+    pub error: u64,
+    /// Resend requests for lines already taken.
+    pub spurious_resend: u64,
+    /// Resend requests sent without their `ok`.
+    pub no_resend_ok: u64,
+    /// Commands preceded by busy reports.
+    pub busy: u64,
+    /// Board resets.
+    pub reset: u64,
+    /// Firmware halts.
+    pub halt: u64,
+    /// Times the printer went silent.
+    pub silent: u64,
+}
+
+impl std::fmt::Display for FaultCounts {
+    /// `corrupt=12 drop=3 ...`, in the `--faults` key names, the non-zero ones only.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let all = [
+            ("corrupt", self.corrupt),
+            ("corrupt-reply", self.corrupt_reply),
+            ("drop", self.drop),
+            ("drop-ok", self.drop_ok),
+            ("error", self.error),
+            ("spurious-resend", self.spurious_resend),
+            ("no-resend-ok", self.no_resend_ok),
+            ("busy", self.busy),
+            ("reset", self.reset),
+            ("halt", self.halt),
+            ("silent", self.silent),
+        ];
+        let shown: Vec<String> = all
+            .iter()
+            .filter(|(_, n)| *n > 0)
+            .map(|(k, n)| format!("{k}={n}"))
+            .collect();
+        if shown.is_empty() {
+            f.write_str("none")
+        } else {
+            f.write_str(&shown.join(" "))
+        }
+    }
 }
 
 /// The `--faults` syntax, for help texts.

@@ -3,29 +3,40 @@
 //! It follows Marlin's `GCodeQueue` closely where the host protocol depends on it:
 //! - a 128-byte receive ring; bytes that do not fit are lost, as on a real board;
 //! - characters are pulled from the ring only while one of the 4 command slots is free;
-//! - a numbered line is checked for its line number first, then its checksum
-//!   (`Error:Line Number is not Last Line Number+1, Last Line: N`, `Error:checksum
-//!   mismatch, Last Line: N`, `Error:No Checksum with line number, Last Line: N`); after an
-//!   error the receive ring is drained and `Resend: N+1` and `ok` follow;
+//! - a numbered line is checked for its line number, then its checksum (the virtual
+//!   printer's dialect checks the checksum first); a refused line gets its dialect's refusal
+//!   (error text, resend request, `ok` or not), and Marlin's receive ring is drained first;
 //! - `ok` is sent after a command executes; M105 answers `ok T:...`; M109/M190 block,
-//!   reporting temperatures and `echo:busy: processing` while heating;
-//! - M112 acts as soon as its line arrives (Marlin's emergency parser).
+//!   reporting temperatures and busy while heating, until done or `M108`;
+//! - M112 and M108 act as soon as their line arrives (Marlin's emergency parser).
+//!
+//! The words come from [`crate::dialect`]: banner, refusal texts, resend and `ok` forms,
+//! busy and halt texts of the chosen firmware family. Commands are read by `isoforge-gcode`
+//! and move the same machine model the host and the slicer's checker follow.
 
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-use super::faults::{Faults, Rng};
-use crate::gcode::{self, checksum};
+use isoforge_gcode::{Command, Machine, framing};
+
+use super::faults::{FaultCounts, Faults, Rng};
+use crate::dialect::{Dialect, Refusal};
 
 /// Marlin's `RX_BUFFER_SIZE` default.
 pub const RX_BUFFER: usize = 128;
 /// Marlin's `BUFSIZE` default.
 pub const COMMAND_SLOTS: usize = 4;
 
+/// How long an idle firmware that says `wait` waits before saying it (Repetier: 1 s).
+const WAIT_AFTER: Duration = Duration::from_secs(1);
+
+/// Lines behind a refused one that Repetier answers with `skip` instead of a new refusal.
+const REPETIER_SKIPS: u32 = 14;
+
 /// One command the firmware executed.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Executed {
-    /// Its line number (`None` for unnumbered commands such as M105 probes).
+    /// Its line number (`None` for unnumbered commands such as the host's connection probes).
     pub line: Option<u64>,
     /// The command, without line number and checksum.
     pub command: String,
@@ -45,6 +56,8 @@ pub struct FirmwareConfig {
     pub rx_buffer: usize,
     /// Command slots.
     pub slots: usize,
+    /// The firmware family whose words it speaks.
+    pub dialect: Dialect,
 }
 
 impl Default for FirmwareConfig {
@@ -55,6 +68,7 @@ impl Default for FirmwareConfig {
             heat_rate: 40.0,
             rx_buffer: RX_BUFFER,
             slots: COMMAND_SLOTS,
+            dialect: Dialect::default(),
         }
     }
 }
@@ -108,15 +122,20 @@ pub struct Firmware {
     run: Run,
     hotends: [Heater; 2],
     bed: Heater,
-    tool: usize,
+    machine: Machine,
     auto_report: Option<(Duration, Instant)>,
     lost_bytes: u64,
+    /// Repetier: lines still answered with `skip` after a refusal.
+    skips_left: u32,
+    /// When the firmware last received or did anything (for `wait`).
+    last_activity: Option<Instant>,
     /// The one-shot events fire once per firmware life, not again after the reset they cause.
     fired: bool,
+    counts: FaultCounts,
 }
 
 impl Firmware {
-    /// A freshly booted firmware; its first output line is `start`.
+    /// A freshly booted firmware; its first output lines are its dialect's banner.
     pub fn new(cfg: FirmwareConfig) -> Firmware {
         let rng = Rng::new(cfg.faults.seed);
         let mut fw = Firmware {
@@ -133,14 +152,23 @@ impl Firmware {
             run: Run::Running,
             hotends: [Heater::ambient(); 2],
             bed: Heater::ambient(),
-            tool: 0,
+            machine: Machine::default(),
             auto_report: None,
             lost_bytes: 0,
+            skips_left: 0,
+            last_activity: None,
             fired: false,
+            counts: FaultCounts::default(),
         };
-        fw.emit("start");
-        fw.emit("echo:isoforge fake printer (Marlin-like)");
+        fw.banner();
         fw
+    }
+
+    fn banner(&mut self) {
+        for line in self.cfg.dialect.banner() {
+            // The banner is the firmware's own; line noise may hit it like anything else.
+            self.emit(line);
+        }
     }
 
     /// Everything executed so far, in order.
@@ -152,6 +180,11 @@ impl Firmware {
     /// Takes the executed record, leaving it empty.
     pub fn take_executed(&mut self) -> Vec<Executed> {
         std::mem::take(&mut self.executed)
+    }
+
+    /// The faults injected so far.
+    pub fn fault_counts(&self) -> FaultCounts {
+        self.counts
     }
 
     /// Bytes lost because the receive ring was full.
@@ -183,6 +216,7 @@ impl Firmware {
         if self.is_dead() {
             return;
         }
+        self.last_activity = None;
         for &b in bytes {
             self.scan_emergency(b);
             if self.is_dead() {
@@ -196,15 +230,27 @@ impl Firmware {
         }
     }
 
-    /// Marlin's emergency parser sees bytes as they arrive, before the command queue.
+    /// Marlin's emergency parser sees bytes as they arrive, before the command queue: `M112`
+    /// kills at once, `M108` ends a heating wait.
     fn scan_emergency(&mut self, b: u8) {
         if b == b'\n' || b == b'\r' {
             let text = String::from_utf8_lossy(&self.emergency_buf).to_string();
             self.emergency_buf.clear();
-            let cmd = strip_line_number(&text);
-            if gcode::code(cmd) == "M112" {
-                self.emit("Error:Printer halted. kill() called!");
-                self.run = Run::Halted;
+            let f = framing(&text);
+            match Command::parse(f.body) {
+                Ok(Some(c)) if c.code.is('M', 112) => {
+                    for line in self.cfg.dialect.halt() {
+                        self.out.push_back(line);
+                    }
+                    self.run = Run::Halted;
+                }
+                Ok(Some(c)) if c.code.is('M', 108) => {
+                    if let Run::Heating { .. } = self.run {
+                        self.run = Run::Running;
+                        self.ok(None);
+                    }
+                }
+                _ => {}
             }
         } else if self.emergency_buf.len() < 128 {
             self.emergency_buf.push(b);
@@ -220,7 +266,16 @@ impl Firmware {
     pub fn next_deadline(&self) -> Option<Instant> {
         match self.run {
             Run::Heating { next_tick, .. } => Some(next_tick),
-            Run::Running => self.auto_report.map(|(_, at)| at),
+            Run::Running => {
+                let wait = self
+                    .last_activity
+                    .filter(|_| self.cfg.dialect.says_wait())
+                    .map(|t| t + WAIT_AFTER);
+                match (self.auto_report.map(|(_, at)| at), wait) {
+                    (Some(a), Some(w)) => Some(a.min(w)),
+                    (a, w) => a.or(w),
+                }
+            }
             _ => None,
         }
     }
@@ -266,6 +321,21 @@ impl Firmware {
             self.execute(cmd, now);
             worked = true;
         }
+        if worked {
+            self.last_activity = Some(now);
+        } else if self.cfg.dialect.says_wait() && self.rx.is_empty() && self.queue.is_empty() {
+            // Repetier and the virtual printer say `wait` after a second with nothing to do,
+            // so a host whose `ok` was lost does not wait for it forever.
+            match self.last_activity {
+                Some(t) if now.duration_since(t) >= WAIT_AFTER => {
+                    self.emit("wait");
+                    self.last_activity = Some(now);
+                    worked = true;
+                }
+                None => self.last_activity = Some(now),
+                Some(_) => {}
+            }
+        }
         worked
     }
 
@@ -279,33 +349,45 @@ impl Firmware {
             let at = self.rng.below(bytes.len());
             bytes[at] = 0x80 | (self.rng.next_u64() as u8 & 0x7f);
             line = String::from_utf8_lossy(&bytes).into_owned();
+            self.counts.corrupt_reply += 1;
         }
         self.out.push_back(line);
     }
 
-    fn line_error(&mut self, what: &str) {
-        self.emit(&format!("Error:{what}, Last Line: {}", self.last_n));
+    /// Refuses the line being read: the dialect's refusal lines, and its `ok`.
+    fn refuse(&mut self, why: Refusal) {
         // Marlin empties its receive ring before asking for the resend.
         self.rx.clear();
         self.line_buf.clear();
-        self.emit(&format!("Resend: {}", self.last_n + 1));
-        if !self.rng.chance(self.cfg.faults.no_resend_ok) {
-            self.ok();
+        for line in self.cfg.dialect.refusal(why, self.last_n) {
+            self.emit(&line);
+        }
+        if self.cfg.dialect == Dialect::Repetier {
+            self.skips_left = REPETIER_SKIPS;
+        }
+        if self.cfg.dialect.ok_after_refusal() {
+            if self.rng.chance(self.cfg.faults.no_resend_ok) {
+                self.counts.no_resend_ok += 1;
+            } else {
+                self.ok(None);
+            }
         }
     }
 
-    fn ok(&mut self) {
+    fn ok(&mut self, line: Option<u64>) {
         if self.cfg.faults.advanced_ok {
             let free = self.cfg.slots.saturating_sub(self.queue.len());
             self.emit(&format!("ok N{} P15 B{free}", self.last_n));
         } else {
-            self.emit("ok");
+            let ok = self.cfg.dialect.ok(line);
+            self.emit(&ok);
         }
     }
 
     fn process_line(&mut self, mut raw: Vec<u8>) {
         let f = self.cfg.faults.clone();
         if self.rng.chance(f.drop) {
+            self.counts.drop += 1;
             return;
         }
         if !raw.is_empty() && self.rng.chance(f.corrupt) {
@@ -316,93 +398,168 @@ impl Firmware {
                 new = b'!' + self.rng.below(94) as u8;
             }
             raw[at] = new;
+            self.counts.corrupt += 1;
         }
         let text = String::from_utf8_lossy(&raw).to_string();
         let text = text.split(';').next().unwrap_or("").trim().to_string();
         if text.is_empty() {
             return;
         }
-        let mut line_number = None;
-        let mut command = text.as_str();
-        if let Some(after_n) = text.strip_prefix('N') {
-            let is_m110 = text.contains("M110");
-            // For M110 Marlin takes the number from M110's own N word.
-            let n_src = if is_m110 {
-                text.find("M110")
-                    .and_then(|p| text[p + 4..].find('N').map(|q| &text[p + 5 + q..]))
-                    .unwrap_or(after_n)
-            } else {
-                after_n
-            };
-            let digits: String = n_src.chars().take_while(char::is_ascii_digit).collect();
-            let n: u64 = digits.parse().unwrap_or(u64::MAX);
-            if n != self.last_n.wrapping_add(1) && !is_m110 {
-                self.line_error("Line Number is not Last Line Number+1");
-                return;
-            }
-            let Some(star) = text.rfind('*') else {
-                self.line_error("No Checksum with line number");
-                return;
-            };
-            let sent: Option<u8> = text[star + 1..].trim().parse().ok();
-            if sent != Some(checksum(&text.as_bytes()[..star])) {
-                self.line_error("checksum mismatch");
-                return;
-            }
-            if self.rng.chance(f.error) {
-                // A refusal without the resend request a host would need.
-                self.emit(&format!(
-                    "Error:checksum mismatch, Last Line: {}",
-                    self.last_n
-                ));
-                self.rx.clear();
-                self.line_buf.clear();
-                self.ok();
-                return;
-            }
-            self.last_n = n;
-            line_number = Some(n);
-            command = strip_line_number(&text[..star]);
-            if self.rng.chance(f.spurious_resend) {
-                self.emit(&format!("Resend: {n}"));
-                self.ok();
-            }
-        } else if text.contains('*') {
-            self.line_error("No Line Number with checksum");
+        let frame = framing(&text);
+        if !self.cfg.dialect.checks_lines() {
+            // Klipper reads past line numbers and checksums without checking them.
+            self.queue.push_back(Executed {
+                line: frame.number,
+                command: frame.body.to_string(),
+            });
             return;
         }
+        let command = frame.body.to_string();
+        if !frame.has_number_word {
+            if frame.has_checksum_mark {
+                self.refuse(Refusal::NoLineNumber);
+                return;
+            }
+            self.queue.push_back(Executed {
+                line: None,
+                command,
+            });
+            return;
+        }
+        let m110 = match Command::parse(&command) {
+            Ok(Some(c)) if c.code.is('M', 110) => Some(c),
+            _ => None,
+        };
+        // strtol: a line number that is not digits reads as 0.
+        let n = frame.number.unwrap_or(0);
+        let checksum_ok = frame.has_checksum_mark && frame.checksum_matches();
+        if self.cfg.dialect.checksum_first() && !checksum_ok {
+            self.refuse_checksum(frame.has_checksum_mark);
+            return;
+        }
+        if m110.is_none() && n != self.last_n.wrapping_add(1) {
+            self.out_of_sequence(n);
+            return;
+        }
+        if !checksum_ok {
+            self.refuse_checksum(frame.has_checksum_mark);
+            return;
+        }
+        if self.rng.chance(f.error) {
+            // A refusal without the resend request a host would need.
+            self.counts.error += 1;
+            self.rx.clear();
+            self.line_buf.clear();
+            let lines = self.cfg.dialect.refusal(Refusal::Checksum, self.last_n);
+            let resends: Vec<String> = lines
+                .iter()
+                .filter_map(|l| crate::dialect::resend_request(l).map(|_| l.clone()))
+                .collect();
+            for l in lines.iter().filter(|l| !resends.contains(l)) {
+                self.emit(l);
+            }
+            if self.cfg.dialect.ok_after_refusal() {
+                self.ok(None);
+            }
+            return;
+        }
+        if m110.is_none()
+            && self.rng.chance(f.spurious_resend)
+            && let Some(resend) = self.cfg.dialect.resend(n)
+        {
+            // A good line refused with a bare request for itself, as OctoPrint's simulator
+            // does on its `resend` error: the line is not taken.
+            self.counts.spurious_resend += 1;
+            self.rx.clear();
+            self.line_buf.clear();
+            self.emit(&resend);
+            if self.cfg.dialect.ok_after_refusal() {
+                self.ok(None);
+            }
+            return;
+        }
+        self.last_n = match &m110 {
+            Some(c) if self.cfg.dialect.m110_takes_argument() => {
+                c.get('N').map_or(n, |v| v.max(0.0) as u64)
+            }
+            _ => n,
+        };
+        self.skips_left = 0;
         self.queue.push_back(Executed {
-            line: line_number,
-            command: command.trim().to_string(),
+            line: Some(n),
+            command,
+        });
+    }
+
+    fn refuse_checksum(&mut self, has_mark: bool) {
+        self.refuse(if has_mark {
+            Refusal::Checksum
+        } else {
+            Refusal::NoChecksum
+        });
+    }
+
+    /// A line whose number is not the last one + 1.
+    fn out_of_sequence(&mut self, n: u64) {
+        let d = self.cfg.dialect;
+        if d.ignores_repeats() && (n == self.last_n || n.wrapping_add(1) == self.last_n) {
+            // Marlin 2: a resend that crossed the request for it; dropped without a word.
+            return;
+        }
+        let seen = n <= self.last_n && self.last_n - n < 40;
+        if (self.skips_left > 0 || (d == Dialect::Repetier && seen))
+            && let Some(skip) = d.skip(n)
+        {
+            self.skips_left = self.skips_left.saturating_sub(1);
+            self.emit(&skip);
+            self.ok(None);
+            return;
+        }
+        self.refuse(Refusal::LineNumber {
+            expected: self.last_n.wrapping_add(1),
+            got: n,
         });
     }
 
     fn execute(&mut self, cmd: Executed, now: Instant) {
         let text = cmd.command.clone();
+        let line = cmd.line;
         self.executed.push(cmd);
         self.executed_count += 1;
-        if self.rng.chance(self.cfg.faults.busy) {
+        if self.rng.chance(self.cfg.faults.busy)
+            && let Some(busy) = self.cfg.dialect.busy()
+        {
+            self.counts.busy += 1;
             for _ in 0..3 {
-                self.emit("echo:busy: processing");
+                self.emit(busy);
             }
         }
-        let code = gcode::code(&text);
-        let s = gcode::word(&text, 'S').or_else(|| gcode::word(&text, 'R'));
+        let parsed = Command::parse(&text).ok().flatten();
+        if let Some(c) = &parsed {
+            self.machine.apply(c);
+        }
         for h in self.hotends.iter_mut().chain([&mut self.bed]) {
             h.approach(self.cfg.heat_rate / 10.0);
         }
-        let tool = gcode::word(&text, 'T').map_or(self.tool, |t| (t as usize).min(1));
-        let mut reply_ok = true;
-        match code.as_str() {
-            "M105" => {
+        let Some(c) = parsed else {
+            self.emit(&format!("echo:Unknown command: \"{text}\""));
+            self.after_ok(line, None);
+            return;
+        };
+        let s = c.get('S').or_else(|| c.get('R'));
+        let tool = c
+            .get('T')
+            .map_or(self.machine.tool.min(1), |t| (t as usize).min(1));
+        match (c.code.letter, c.code.number) {
+            ('M', 105) => {
                 let report = self.temperature_report();
-                self.after_ok(Some(format!("ok{report}")));
+                self.after_ok(line, Some(format!("ok{report}")));
                 return;
             }
-            "M104" => self.hotends[tool].target = s.unwrap_or(0.0),
-            "M140" => self.bed.target = s.unwrap_or(0.0),
-            "M109" | "M190" => {
-                let bed = code == "M190";
+            ('M', 104) => self.hotends[tool].target = s.unwrap_or(0.0),
+            ('M', 140) => self.bed.target = s.unwrap_or(0.0),
+            ('M', n @ (109 | 190)) => {
+                let bed = n == 190;
                 let heater = if bed {
                     &mut self.bed
                 } else {
@@ -418,12 +575,15 @@ impl Firmware {
                 };
                 return;
             }
-            "M110" => {
-                if let Some(n) = gcode::word(&text, 'N') {
-                    self.last_n = n as u64;
+            ('M', 110) => {
+                // Marlin sets its count again when M110 runs.
+                if self.cfg.dialect.m110_takes_argument()
+                    && let Some(n) = c.get('N')
+                {
+                    self.last_n = n.max(0.0) as u64;
                 }
             }
-            "M155" => {
+            ('M', 155) => {
                 self.auto_report = match s {
                     Some(secs) if secs > 0.0 => {
                         let every = Duration::from_secs_f64(secs.min(60.0));
@@ -432,31 +592,38 @@ impl Firmware {
                     _ => None,
                 };
             }
-            "M115" => {
-                self.emit("FIRMWARE_NAME:isoforge fake printer (Marlin-like) PROTOCOL_VERSION:1.0");
+            ('M', 115) => {
+                let name = self.cfg.dialect.firmware_name();
+                self.emit(&format!("FIRMWARE_NAME:{name} PROTOCOL_VERSION:1.0"));
                 let adv = u8::from(self.cfg.faults.advanced_ok);
                 self.emit(&format!("Cap:ADVANCED_OK:{adv}"));
                 self.emit("Cap:AUTOREPORT_TEMP:1");
             }
-            "M114" => self.emit("X:0.00 Y:0.00 Z:0.00 E:0.00 Count X:0 Y:0 Z:0"),
-            "T0" | "T1" => self.tool = if code == "T1" { 1 } else { 0 },
-            c if is_known(c) => {}
+            ('M', 114) => {
+                let p = self.machine.position.map(|v| v.unwrap_or(0.0));
+                self.emit(&format!(
+                    "X:{:.2} Y:{:.2} Z:{:.2} E:{:.2} Count X:0 Y:0 Z:0",
+                    p[0], p[1], p[2], self.machine.e
+                ));
+            }
+            (l, n) if is_known(l, n) => {}
             _ => {
                 self.emit(&format!("echo:Unknown command: \"{text}\""));
             }
         }
-        if reply_ok {
-            reply_ok = !self.rng.chance(self.cfg.faults.drop_ok);
-        }
-        self.after_ok(reply_ok.then(String::new));
+        self.after_ok(line, None);
     }
 
-    /// Sends the `ok` (when given) and fires a one-shot event due at this command count.
-    fn after_ok(&mut self, ok: Option<String>) {
-        match ok {
-            Some(s) if s.is_empty() => self.ok(),
-            Some(s) => self.emit(&s),
-            None => {}
+    /// Sends the `ok` (or `ok_text`) unless it is lost, and fires a one-shot event due at
+    /// this command count.
+    fn after_ok(&mut self, line: Option<u64>, ok_text: Option<String>) {
+        if self.rng.chance(self.cfg.faults.drop_ok) {
+            self.counts.drop_ok += 1;
+        } else {
+            match ok_text {
+                Some(s) => self.emit(&s),
+                None => self.ok(line),
+            }
         }
         let f = &self.cfg.faults;
         let n = self.executed_count;
@@ -465,13 +632,18 @@ impl Firmware {
         }
         if f.reset_at == Some(n) {
             self.fired = true;
+            self.counts.reset += 1;
             self.reset();
         } else if f.halt_at == Some(n) {
             self.fired = true;
-            self.emit("Error:Printer halted. kill() called!");
+            self.counts.halt += 1;
+            for line in self.cfg.dialect.halt() {
+                self.emit(&line);
+            }
             self.run = Run::Halted;
         } else if f.silent_at == Some(n) {
             self.fired = true;
+            self.counts.silent += 1;
             self.run = Run::Silent;
         }
     }
@@ -485,28 +657,32 @@ impl Firmware {
         self.run = Run::Running;
         self.hotends = [Heater::ambient(); 2];
         self.bed = Heater::ambient();
+        self.machine = Machine::default();
         self.auto_report = None;
-        self.emit("start");
+        self.skips_left = 0;
+        self.banner();
     }
 
     fn heat_tick(&mut self, bed: bool, ticks: u32, now: Instant) {
         let rate = self.cfg.heat_rate;
+        let tool = self.machine.tool.min(1);
         let heater = if bed {
             &mut self.bed
         } else {
-            &mut self.hotends[self.tool]
+            &mut self.hotends[tool]
         };
         heater.approach(rate);
         let done = (heater.temp - heater.target).abs() < 0.5 || heater.target <= 0.0;
         let report = self.temperature_report();
         self.emit(&format!("{report} W:?"));
-        if ticks % 2 == 1 {
-            self.emit("echo:busy: processing");
+        if ticks % 2 == 1
+            && let Some(busy) = self.cfg.dialect.busy()
+        {
+            self.emit(busy);
         }
         if done {
             self.run = Run::Running;
-            let ok = !self.rng.chance(self.cfg.faults.drop_ok);
-            self.after_ok(ok.then(String::new));
+            self.after_ok(None, None);
         } else {
             self.run = Run::Heating {
                 bed,
@@ -517,7 +693,7 @@ impl Firmware {
     }
 
     fn temperature_report(&self) -> String {
-        let t = self.hotends[self.tool];
+        let t = self.hotends[self.machine.tool.min(1)];
         let mut s = format!(
             " T:{:.1} /{:.1} B:{:.1} /{:.1}",
             t.temp, t.target, self.bed.temp, self.bed.target
@@ -529,55 +705,36 @@ impl Firmware {
     }
 }
 
-/// Drops a leading `N123 `.
-fn strip_line_number(text: &str) -> &str {
-    let t = text.trim_start();
-    match t.strip_prefix('N') {
-        Some(rest) => rest
-            .trim_start_matches(|c: char| c.is_ascii_digit())
-            .trim_start(),
-        None => t,
-    }
-}
-
 /// Commands the model accepts silently (it does not move anything).
-fn is_known(code: &str) -> bool {
-    matches!(
-        code,
-        "G0" | "G1"
-            | "G2"
-            | "G3"
-            | "G4"
-            | "G10"
-            | "G11"
-            | "G20"
-            | "G21"
-            | "G28"
-            | "G29"
-            | "G90"
-            | "G91"
-            | "G92"
-            | "M17"
-            | "M18"
-            | "M73"
-            | "M82"
-            | "M83"
-            | "M84"
-            | "M106"
-            | "M107"
-            | "M117"
-            | "M201"
-            | "M203"
-            | "M204"
-            | "M205"
-            | "M220"
-            | "M221"
-            | "M300"
-            | "M400"
-            | "M500"
-            | "M501"
-            | "M503"
-    )
+fn is_known(letter: char, number: u32) -> bool {
+    match letter {
+        'G' => matches!(number, 0..=4 | 10 | 11 | 20 | 21 | 28 | 29 | 90 | 91 | 92),
+        'M' => matches!(
+            number,
+            17 | 18
+                | 73
+                | 82
+                | 83
+                | 84
+                | 106
+                | 107
+                | 108
+                | 117
+                | 201
+                | 203
+                | 204
+                | 205
+                | 220
+                | 221
+                | 300
+                | 400
+                | 500
+                | 501
+                | 503
+        ),
+        'T' => number <= 1,
+        _ => false,
+    }
 }
 
 #[cfg(test)]

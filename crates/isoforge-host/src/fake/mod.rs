@@ -4,7 +4,8 @@
 //! [`FakePrinter::spawn`] opens a pty pair, runs the `Firmware` model on a thread behind the
 //! master end, and gives the slave's path for a host to open like any serial port. With a
 //! baud rate, bytes cross the "wire" no faster than a real link would carry them (10 bits a
-//! byte), in both directions.
+//! byte), in both directions. It speaks the [`Dialect`](crate::dialect::Dialect) of the
+//! firmware family it is set to, and counts the faults it injects ([`FaultCounts`]).
 
 mod faults;
 mod firmware;
@@ -23,7 +24,7 @@ use thiserror::Error;
 
 #[cfg(test)]
 pub(crate) use faults::Rng;
-pub use faults::{FAULTS_HELP, Faults, FaultsError};
+pub use faults::{FAULTS_HELP, FaultCounts, Faults, FaultsError};
 pub(crate) use firmware::Firmware;
 pub use firmware::{Executed, FirmwareConfig};
 
@@ -38,8 +39,9 @@ pub struct FakeConfig {
     /// can reconnect (tests of `--resume` do).
     pub exit_on_disconnect: bool,
     /// Record every executed command in this file (`<line>\t<command>`, `-` for
-    /// unnumbered). Written through `isoforge-output`: it appears whole when the printer
-    /// stops (a FIFO or terminal gets each line as it runs).
+    /// unnumbered), then a last line `# faults <counts>`. Written through
+    /// `isoforge-output`: it appears whole when the printer stops (a FIFO or terminal gets
+    /// each line as it runs).
     pub log: Option<PathBuf>,
 }
 
@@ -64,6 +66,7 @@ pub struct FakePrinter {
     path: String,
     stop: Arc<AtomicBool>,
     executed: Arc<Mutex<Vec<Executed>>>,
+    counts: Arc<Mutex<FaultCounts>>,
     thread: Option<JoinHandle<io::Result<()>>>,
 }
 
@@ -85,7 +88,9 @@ impl FakePrinter {
         };
         let stop = Arc::new(AtomicBool::new(false));
         let executed = Arc::new(Mutex::new(Vec::new()));
+        let counts = Arc::new(Mutex::new(FaultCounts::default()));
         let link = Link {
+            counts: counts.clone(),
             master,
             slave: Some(slave),
             firmware: Firmware::new(cfg.firmware.clone()),
@@ -106,6 +111,7 @@ impl FakePrinter {
             path,
             stop,
             executed,
+            counts,
             thread: Some(thread),
         })
     }
@@ -121,6 +127,11 @@ impl FakePrinter {
             .lock()
             .unwrap_or_else(PoisonError::into_inner)
             .clone()
+    }
+
+    /// The faults injected so far.
+    pub fn fault_counts(&self) -> FaultCounts {
+        *self.counts.lock().unwrap_or_else(PoisonError::into_inner)
     }
 
     /// A handle that stops the printer from another thread (a signal handler), after which
@@ -177,6 +188,7 @@ struct Link {
     log: Option<BufWriter<OutputFile>>,
     stop: Arc<AtomicBool>,
     executed: Arc<Mutex<Vec<Executed>>>,
+    counts: Arc<Mutex<FaultCounts>>,
 }
 
 /// Longest the loop sleeps with nothing scheduled, so `stop` is noticed promptly.
@@ -187,10 +199,11 @@ impl Link {
     /// ran are worth keeping even when the link failed.
     fn run(mut self) -> io::Result<()> {
         let served = self.serve();
+        let counts = self.firmware.fault_counts();
+        *self.counts.lock().unwrap_or_else(PoisonError::into_inner) = counts;
         let logged = match self.log.take() {
-            Some(log) => log
-                .into_inner()
-                .map_err(io::IntoInnerError::into_error)
+            Some(mut log) => writeln!(log, "# faults {counts}")
+                .and_then(|()| log.into_inner().map_err(io::IntoInnerError::into_error))
                 .and_then(|out| out.commit().map_err(io::Error::from)),
             None => Ok(()),
         };
@@ -298,6 +311,7 @@ impl Link {
     }
 
     fn record(&mut self) -> io::Result<()> {
+        *self.counts.lock().unwrap_or_else(PoisonError::into_inner) = self.firmware.fault_counts();
         let new = self.firmware.take_executed();
         if new.is_empty() {
             return Ok(());

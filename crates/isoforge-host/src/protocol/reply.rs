@@ -1,11 +1,13 @@
 //! Classifying one line from the printer.
 //!
-//! Forms follow Marlin (`ok`, `ok N12 P15 B3` with ADVANCED_OK, `Resend: N`, `Error:...`,
-//! `echo:busy: processing`, `echo:Unknown command: "X"`, `start`, `//action:pause`), with the
-//! variants other RepRap firmwares print (`Resend:N`, `rs N`, Teacup's `rs N2 Expected
-//! checksum 67`, `wait`).
+//! `ok` in its forms (`ok`, `ok N12 P15 B3` with ADVANCED_OK, `ok 12` from Repetier,
+//! `ok T:...` as the M105 reply), resend requests in every firmware's form (see
+//! [`crate::dialect`]), `Error:` lines (judged by the protocol, which sees the burst they
+//! come in), fatal `!!`/`fatal:` lines, busy and wait, `start`, unknown-command echoes,
+//! temperature reports, `//action:` requests; anything else is chatter.
 
 use super::temperature::Temperatures;
+use crate::dialect::{self, ResendForm};
 
 /// What the firmware asks the host to do (`//action:...`).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -25,31 +27,23 @@ pub enum HostAction {
 pub enum Reply {
     /// A command was processed.
     Ok {
-        /// ADVANCED_OK: the last line number the firmware received.
+        /// ADVANCED_OK: the last line number the firmware received (Repetier: the line
+        /// this `ok` is for).
         line: Option<u64>,
-        /// ADVANCED_OK: free planner blocks.
-        planner: Option<u32>,
         /// ADVANCED_OK: free command-buffer slots.
         buffer: Option<u32>,
         /// Temperatures carried on the same line (`ok T:...`, the M105 reply).
         temps: Option<Temperatures>,
     },
-    /// Send again from this line number.
-    Resend(u64),
-    /// Marlin rejected a line: `Error:Line Number is not Last Line Number+1, Last Line: N`,
-    /// `Error:checksum mismatch, Last Line: N`, `Error:No Checksum with line number, Last
-    /// Line: N`, `Error:No Line Number with checksum, Last Line: N`.
-    LineError {
-        /// The last line number the firmware accepted.
-        last_line: u64,
-        /// The message.
-        message: String,
-    },
-    /// Any other `Error:` line (`Printer halted. kill() called!`).
+    /// A resend request (or Repetier's `skip`), with its form.
+    Resend(u64, ResendForm),
+    /// An `Error:` line, the text after `Error:`.
     Error(String),
+    /// A line that is fatal by its opening (`!! ...`, `fatal: ...`).
+    Fatal(String),
     /// `echo:busy: processing` and friends: the printer is alive but working.
     Busy,
-    /// `wait`: an idle firmware waiting for commands.
+    /// `wait`: the firmware is idle with nothing queued.
     Wait,
     /// `start`: the firmware (re)booted.
     Start,
@@ -72,18 +66,14 @@ impl Reply {
         {
             return parse_ok(rest);
         }
-        if let Some(n) = resend_number(line) {
-            return Reply::Resend(n);
+        if let Some((n, form)) = dialect::resend_request(line) {
+            return Reply::Resend(n, form);
         }
         if let Some(msg) = strip_prefix_ci(line, "error:") {
-            let msg = msg.trim().to_string();
-            if let Some(last_line) = last_line_number(&msg) {
-                return Reply::LineError {
-                    last_line,
-                    message: msg,
-                };
-            }
-            return Reply::Error(msg);
+            return Reply::Error(msg.trim().to_string());
+        }
+        if dialect::is_fatal_line(line) {
+            return Reply::Fatal(line.to_string());
         }
         if line == "start" {
             return Reply::Start;
@@ -100,17 +90,17 @@ impl Reply {
                 _ => HostAction::Other(rest.to_string()),
             });
         }
-        if let Some(echo) = line.strip_prefix("echo:") {
-            let echo = echo.trim_start();
-            if echo.starts_with("busy:") {
-                return Reply::Busy;
-            }
-            if let Some(cmd) = echo.strip_prefix("Unknown command:") {
-                return Reply::UnknownCommand(cmd.trim().trim_matches('"').to_string());
-            }
-        }
-        if line.starts_with("busy:") {
+        let unprefixed = line.strip_prefix("echo:").map_or(line, str::trim_start);
+        // Marlin `echo:busy: processing`, Repetier `busy:processing`, OctoPrint's
+        // simulator `echo:busy processing`.
+        if unprefixed
+            .strip_prefix("busy")
+            .is_some_and(|r| r.starts_with([':', ' ']))
+        {
             return Reply::Busy;
+        }
+        if let Some(cmd) = unprefixed.strip_prefix("Unknown command:") {
+            return Reply::UnknownCommand(cmd.trim().trim_matches('"').to_string());
         }
         if let Some(t) = Temperatures::parse(line) {
             return Reply::Temperatures(t);
@@ -127,47 +117,21 @@ fn strip_prefix_ci<'a>(s: &'a str, prefix: &str) -> Option<&'a str> {
 
 fn parse_ok(rest: &str) -> Reply {
     let mut line = None;
-    let mut planner = None;
     let mut buffer = None;
     for w in rest.split_whitespace() {
         if let Some(v) = w.strip_prefix('N') {
             line = line.or(v.parse().ok());
-        } else if let Some(v) = w.strip_prefix('P') {
-            planner = planner.or(v.parse().ok());
         } else if let Some(v) = w.strip_prefix('B') {
             buffer = buffer.or(v.parse().ok());
+        } else if w.bytes().all(|b| b.is_ascii_digit()) {
+            line = line.or(w.parse().ok());
         }
     }
     Reply::Ok {
         line,
-        planner,
         buffer,
         temps: Temperatures::parse(rest),
     }
-}
-
-/// `Resend: 12`, `Resend:12`, `rs 12`, `rs N12 Expected checksum 67`.
-fn resend_number(line: &str) -> Option<u64> {
-    let rest = strip_prefix_ci(line, "resend:").or_else(|| {
-        line.strip_prefix("rs ")
-            .or_else(|| line.strip_prefix("rs:"))
-    })?;
-    let rest = rest.trim_start();
-    let rest = rest.strip_prefix('N').unwrap_or(rest);
-    let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
-    // A number followed by garbage is a damaged line, not a request to act on.
-    let after = &rest[digits.len()..];
-    if !(after.is_empty() || after.starts_with(' ')) {
-        return None;
-    }
-    digits.parse().ok()
-}
-
-/// `..., Last Line: 41`.
-fn last_line_number(msg: &str) -> Option<u64> {
-    let at = msg.find("Last Line:")?;
-    let digits = msg[at + "Last Line:".len()..].trim();
-    digits.parse().ok()
 }
 
 #[cfg(test)]
@@ -180,69 +144,59 @@ mod tests {
             Reply::parse("ok"),
             Reply::Ok {
                 line: None,
-                planner: None,
                 buffer: None,
                 temps: None
             }
         );
         match Reply::parse("ok N12 P15 B3") {
-            Reply::Ok {
-                line,
-                planner,
-                buffer,
-                ..
-            } => {
-                assert_eq!((line, planner, buffer), (Some(12), Some(15), Some(3)));
-            }
+            Reply::Ok { line, buffer, .. } => assert_eq!((line, buffer), (Some(12), Some(3))),
+            r => panic!("{r:?}"),
+        }
+        match Reply::parse("ok 12") {
+            Reply::Ok { line, buffer, .. } => assert_eq!((line, buffer), (Some(12), None)),
             r => panic!("{r:?}"),
         }
         match Reply::parse("ok T:200.0 /200.0 B:60.0 /60.0 @:0 B@:0\r") {
             Reply::Ok { temps: Some(t), .. } => assert_eq!(t.tools[0].actual, 200.0),
             r => panic!("{r:?}"),
         }
-        // Not an ok: a word that starts with the letters.
+        // Not an ok: a word that starts with the letters, or `SD card ok`.
         assert!(matches!(Reply::parse("okay"), Reply::Other(_)));
+        assert!(matches!(Reply::parse("SD card ok"), Reply::Other(_)));
     }
 
     #[test]
-    fn resend_forms() {
-        assert_eq!(Reply::parse("Resend: 12"), Reply::Resend(12));
-        assert_eq!(Reply::parse("Resend:12"), Reply::Resend(12));
-        assert_eq!(Reply::parse("rs 12"), Reply::Resend(12));
-        assert_eq!(Reply::parse("rs N2 Expected checksum 67"), Reply::Resend(2));
+    fn resends_errors_and_fatal_lines() {
+        assert_eq!(
+            Reply::parse("Resend: 12"),
+            Reply::Resend(12, ResendForm::Resend)
+        );
+        assert_eq!(Reply::parse("skip 12"), Reply::Resend(12, ResendForm::Skip));
+        assert_eq!(
+            Reply::parse("Error: Missing checksum"),
+            Reply::Error("Missing checksum".into())
+        );
+        assert_eq!(
+            Reply::parse("!! Lost communication with MCU 'mcu'"),
+            Reply::Fatal("!! Lost communication with MCU 'mcu'".into())
+        );
         assert!(matches!(
-            Reply::parse("Resend: 1\u{fffd}2"),
-            Reply::Other(_)
+            Reply::parse("fatal:Heater failure"),
+            Reply::Fatal(_)
         ));
     }
 
     #[test]
-    fn error_forms() {
-        for (line, n) in [
-            (
-                "Error:Line Number is not Last Line Number+1, Last Line: 41",
-                41,
-            ),
-            ("Error:checksum mismatch, Last Line: 7", 7),
-            ("Error:No Checksum with line number, Last Line: 0", 0),
-            ("Error:No Line Number with checksum, Last Line: 3", 3),
-        ] {
-            match Reply::parse(line) {
-                Reply::LineError { last_line, .. } => assert_eq!(last_line, n),
-                r => panic!("{line}: {r:?}"),
-            }
-        }
-        assert_eq!(
-            Reply::parse("Error:Printer halted. kill() called!"),
-            Reply::Error("Printer halted. kill() called!".into())
-        );
-    }
-
-    #[test]
     fn chatter_forms() {
-        assert_eq!(Reply::parse("echo:busy: processing"), Reply::Busy);
-        assert_eq!(Reply::parse("echo:busy: paused for user"), Reply::Busy);
-        assert_eq!(Reply::parse("busy: processing"), Reply::Busy);
+        for busy in [
+            "echo:busy: processing",
+            "echo:busy: paused for user",
+            "busy: processing",
+            "busy:processing",
+            "echo:busy processing",
+        ] {
+            assert_eq!(Reply::parse(busy), Reply::Busy, "{busy}");
+        }
         assert_eq!(Reply::parse("wait"), Reply::Wait);
         assert_eq!(Reply::parse("start"), Reply::Start);
         assert_eq!(
@@ -254,10 +208,6 @@ mod tests {
             Reply::Action(HostAction::Pause)
         );
         assert_eq!(
-            Reply::parse("//action:resume"),
-            Reply::Action(HostAction::Resume)
-        );
-        assert_eq!(
             Reply::parse("//action:cancel"),
             Reply::Action(HostAction::Cancel)
         );
@@ -266,5 +216,9 @@ mod tests {
             Reply::Temperatures(_)
         ));
         assert!(matches!(Reply::parse("echo:SD init fail"), Reply::Other(_)));
+        assert!(matches!(
+            Reply::parse("Marlin: Virtual Marlin!"),
+            Reply::Other(_)
+        ));
     }
 }

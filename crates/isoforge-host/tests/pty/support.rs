@@ -38,7 +38,7 @@ pub fn test_config() -> Config {
     Config {
         timeout: Duration::from_millis(700),
         long_timeout: Duration::from_secs(3),
-        suspect_timeout: Duration::from_millis(200),
+        quiet_floor: Duration::from_millis(50),
         connect_timeout: Duration::from_secs(5),
         ..Config::default()
     }
@@ -83,11 +83,12 @@ pub fn new_journal(
     )
 }
 
-/// Job commands from an executed record: numbered, without M110.
+/// Job commands from an executed record: numbered, without the host's own lines (M110
+/// renumbering, M105 probes; the sample jobs have neither).
 pub fn job_commands(record: &[Executed]) -> Vec<String> {
     record
         .iter()
-        .filter(|e| e.line.is_some() && !e.command.starts_with("M110"))
+        .filter(|e| e.line.is_some() && !e.command.starts_with("M110") && e.command != "M105")
         .map(|e| e.command.clone())
         .collect()
 }

