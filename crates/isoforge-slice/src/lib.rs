@@ -21,7 +21,9 @@
 pub mod check;
 mod fdm;
 mod gcode;
+mod clip;
 mod geom;
+mod medial;
 mod infill;
 mod outline;
 mod paths;
@@ -29,6 +31,7 @@ mod perimeters;
 mod profile;
 mod raster;
 mod skins;
+mod walls;
 pub mod sl1;
 mod source;
 pub mod svx;
