@@ -12,7 +12,7 @@ use i_overlay::mesh::float::stroke::offset::StrokeOffset;
 use i_overlay::mesh::float::style::{LineCap, LineJoin, OutlineStyle, StrokeStyle};
 use i_overlay::string::clip::ClipRule;
 
-use crate::geom::{Contour, Point, Region, dist};
+use crate::geom::{Contour, Point, Region, dist, signed_area, simplify_closed};
 
 /// Mitre corners down to this interior angle; sharper ones are clipped, which keeps a
 /// knife-edge corner from shooting a spike out of the part.
@@ -27,6 +27,16 @@ pub fn region_from_contours(contours: &[Contour]) -> Region {
     contours.to_vec().simplify_shape(FillRule::NonZero)
 }
 
+/// Contours are simplified within this before they are offset, mm. Offsets make chains of
+/// edges a few µm long (each mitred corner becomes three points); offsetting those again
+/// with mitres gave i_overlay 9.1 spikes half the offset long and sliver triangles
+/// (measured on a 3 mm hole opened by 0.45 mm: 16 contours, 0.45 mm spikes; simplified
+/// first: 2 contours within 1 µm).
+const OFFSET_SIMPLIFY: f64 = 0.002;
+
+/// Pieces smaller than this are dropped from offsets and booleans, mm².
+const SLIVER_AREA: f64 = 1e-6;
+
 /// The region grown (positive `d`) or shrunk (negative `d`) by `d` mm, mitred corners.
 pub fn offset(region: &Region, d: f64) -> Region {
     if region.is_empty() {
@@ -36,7 +46,30 @@ pub fn offset(region: &Region, d: f64) -> Region {
         return region.clone();
     }
     let style = OutlineStyle::new(d).line_join(LineJoin::Miter(MITER_MIN_ANGLE));
-    region.outline(&style)
+    clean(simplified(region).outline(&style))
+}
+
+/// The region's contours simplified within [`OFFSET_SIMPLIFY`].
+fn simplified(region: &Region) -> Region {
+    region
+        .iter()
+        .map(|shape| {
+            shape
+                .iter()
+                .map(|c| simplify_closed(c, OFFSET_SIMPLIFY))
+                .collect()
+        })
+        .collect()
+}
+
+/// The region without sliver contours (and shapes whose outer contour is one).
+fn clean(mut region: Region) -> Region {
+    region.retain(|shape| shape.first().is_some_and(|c| signed_area(c).abs() > SLIVER_AREA));
+    for shape in &mut region {
+        let mut first = true;
+        shape.retain(|c| std::mem::replace(&mut first, false) || signed_area(c).abs() > SLIVER_AREA);
+    }
+    region
 }
 
 /// The region grown by `d` mm with round corners: every point within `d` of it.
@@ -45,7 +78,7 @@ pub fn grow_round(region: &Region, d: f64) -> Region {
         return region.clone();
     }
     let style = OutlineStyle::new(d).line_join(LineJoin::Round(ROUND_STEP));
-    region.outline(&style)
+    clean(simplified(region).outline(&style))
 }
 
 /// Round joins and caps are drawn with chords of this length over radius: each chord

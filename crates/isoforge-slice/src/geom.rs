@@ -92,9 +92,17 @@ pub fn segments_cross(a: Point, b: Point, c: Point, d: Point) -> bool {
 /// contours slow polygon offsetting down superlinearly (docs/constants.md), so every
 /// outline goes through this before perimeters are built.
 pub fn simplify_closed(c: &[Point], tol: f64) -> Contour {
+    simplify_closed_indices(c, tol)
+        .into_iter()
+        .map(|i| c[i])
+        .collect()
+}
+
+/// [`simplify_closed`], as the indices of the points kept, in order.
+pub fn simplify_closed_indices(c: &[Point], tol: f64) -> Vec<usize> {
     let n = c.len();
     if n <= 4 || tol <= 0.0 {
-        return c.to_vec();
+        return (0..n).collect();
     }
     // Split the loop at the point farthest from the first one: both halves are open
     // polylines with well-separated ends, which Douglas-Peucker handles well.
@@ -125,8 +133,8 @@ pub fn simplify_closed(c: &[Point], tol: f64) -> Contour {
             stack.push((best.1, j));
         }
     }
-    let out: Contour = (0..n).filter(|&i| keep[i]).map(|i| c[i]).collect();
-    if out.len() < 3 { c.to_vec() } else { out }
+    let out: Vec<usize> = (0..n).filter(|&i| keep[i]).collect();
+    if out.len() < 3 { (0..n).collect() } else { out }
 }
 
 /// Douglas-Peucker simplification of an open polyline: the indices of the points kept

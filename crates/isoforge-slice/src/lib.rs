@@ -18,19 +18,22 @@
 //! writers in [`sl1`] and [`svx`], and the G-code checker in [`check`]. Outlines, perimeters,
 //! skins, infill and path ordering are internal stages.
 
+mod adhesion;
+mod bridges;
 pub mod check;
+mod clip;
 mod fdm;
 mod gcode;
-mod clip;
 mod geom;
-mod medial;
 mod infill;
+mod medial;
 mod outline;
+mod overhangs;
 mod paths;
-mod perimeters;
 mod profile;
 mod raster;
-mod skins;
+mod supports;
+mod surfaces;
 mod walls;
 pub mod sl1;
 mod source;
@@ -39,12 +42,13 @@ pub mod svx;
 #[cfg(test)]
 mod region_agreement_tests;
 
-pub use fdm::{GcodeJob, Progress, slice_gcode};
+pub use fdm::{Control, GcodeJob, Progress, SliceWarning, slice_gcode, slice_plate};
 pub use gcode::GcodeStats;
+pub use paths::Role;
 pub use profile::keys;
 pub use profile::{
-    FdmSettings, InfillPattern, Origin, PLACEHOLDERS, Profile, ProfileError, ProfileErrorKind,
-    ResinSettings, Technology,
+    DisplayOrientation, FdmSettings, InfillPattern, Origin, PLACEHOLDERS, Profile, ProfileError,
+    ProfileErrorKind, ResinSettings, SupportStyle, Technology, TopFillPattern,
 };
 pub use raster::{GridSpec, LayerImages, PixelGrid, render_layers};
 pub use source::{Layer, Source};
@@ -172,6 +176,24 @@ pub enum SliceError {
         /// The first layer that reaches its edge.
         layer: usize,
     },
+    /// The layer height would make more layers than one job may have.
+    #[error(
+        "the model is {height:.1} mm tall: {layers} layers of {layer_height} mm, more than \
+         the {max} one job may have; use a larger layer_height"
+    )]
+    TooManyLayers {
+        /// The model's height, mm.
+        height: f64,
+        /// The layer height, mm.
+        layer_height: f64,
+        /// The layers it would take.
+        layers: usize,
+        /// The most allowed.
+        max: usize,
+    },
+    /// The work was cancelled through the cancel flag.
+    #[error("cancelled")]
+    Cancelled,
     /// Layer images of this size cannot be made.
     #[error(
         "layer images of {width} x {height} pixels of {pixel} mm, {layer_height} mm apart, \
