@@ -5,6 +5,9 @@
 //! layer (from `;LAYER:n`) and feature (`;TYPE:`), the temperatures set before the first
 //! extrusion, and the travel envelope.
 
+mod bridges;
+pub mod features;
+
 /// An extruding move.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Extrude {
@@ -22,11 +25,32 @@ pub struct Extrude {
     pub line: usize,
 }
 
+/// Any move (G0/G1), extruding or not.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Motion {
+    /// Start, mm.
+    pub from: [f64; 3],
+    /// End, mm.
+    pub to: [f64; 3],
+    /// Filament pushed (negative: pulled back), mm.
+    pub e: f64,
+    /// Feed rate in force, mm/s (0 before any F).
+    pub feed: f64,
+    /// The layer it belongs to.
+    pub layer: Option<usize>,
+    /// Line number (1-based).
+    pub line: usize,
+}
+
 /// What a G-code file does.
 #[derive(Clone, Debug, Default)]
 pub struct GcodeReport {
     /// Extruding moves (retractions and primes without motion are not here).
     pub extrusions: Vec<Extrude>,
+    /// Every move, in file order (the judges in [`features`] read these).
+    pub moves: Vec<Motion>,
+    /// Waits (`G4`), s, with their layer.
+    pub dwells: Vec<(Option<usize>, f64)>,
     /// `;LAYER:n` markers with the `;Z:` that followed each, in file order.
     pub layers: Vec<(usize, Option<f64>)>,
     /// The Z of the first extrusion of each layer index.
@@ -75,6 +99,7 @@ pub fn parse(text: &str) -> Result<GcodeReport, CheckError> {
     let mut layer: Option<usize> = None;
     let mut feature = String::new();
     let (mut nozzle, mut bed, mut waited) = (None, None, false);
+    let mut feed = 0.0f64;
     for (idx, raw) in text.lines().enumerate() {
         let n = idx + 1;
         let (code, comment) = match raw.split_once(';') {
@@ -128,9 +153,22 @@ pub fn parse(text: &str) -> Result<GcodeReport, CheckError> {
                     None => 0.0,
                 };
                 e += de;
+                if let Some(f) = num('F')? {
+                    feed = f / 60.0;
+                }
                 let moved = to != pos;
                 if moved {
                     homed_or_moved = true;
+                }
+                if moved || de != 0.0 {
+                    r.moves.push(Motion {
+                        from: pos,
+                        to,
+                        e: de,
+                        feed,
+                        layer,
+                        line: n,
+                    });
                 }
                 if de > 0.0 && (to[0] != pos[0] || to[1] != pos[1]) {
                     r.filament_mm += de;
@@ -164,6 +202,14 @@ pub fn parse(text: &str) -> Result<GcodeReport, CheckError> {
             "G28" => {
                 pos = [0.0; 3];
                 homed_or_moved = true;
+            }
+            "G4" => {
+                let secs = match (num('P')?, num('S')?) {
+                    (Some(ms), _) => ms / 1000.0,
+                    (None, Some(sec)) => sec,
+                    _ => 0.0,
+                };
+                r.dwells.push((layer, secs));
             }
             "G90" => abs_xyz = true,
             "G91" => abs_xyz = false,

@@ -4,15 +4,12 @@
 
 use i_overlay::core::fill_rule::FillRule;
 use i_overlay::core::overlay_rule::OverlayRule;
-use i_overlay::float::clip::FloatClip;
 use i_overlay::float::simplify::SimplifyShape;
 use i_overlay::float::single::SingleFloatOverlay;
 use i_overlay::mesh::float::outline::offset::OutlineOffset;
-use i_overlay::mesh::float::stroke::offset::StrokeOffset;
-use i_overlay::mesh::float::style::{LineCap, LineJoin, OutlineStyle, StrokeStyle};
-use i_overlay::string::clip::ClipRule;
+use i_overlay::mesh::float::style::{LineJoin, OutlineStyle};
 
-use crate::geom::{Contour, Point, Region, dist, signed_area, simplify_closed};
+use crate::geom::{Contour, Region, signed_area, simplify_closed};
 
 /// Mitre corners down to this interior angle; sharper ones are clipped, which keeps a
 /// knife-edge corner from shooting a spike out of the part.
@@ -64,10 +61,15 @@ fn simplified(region: &Region) -> Region {
 
 /// The region without sliver contours (and shapes whose outer contour is one).
 fn clean(mut region: Region) -> Region {
-    region.retain(|shape| shape.first().is_some_and(|c| signed_area(c).abs() > SLIVER_AREA));
+    region.retain(|shape| {
+        shape
+            .first()
+            .is_some_and(|c| signed_area(c).abs() > SLIVER_AREA)
+    });
     for shape in &mut region {
         let mut first = true;
-        shape.retain(|c| std::mem::replace(&mut first, false) || signed_area(c).abs() > SLIVER_AREA);
+        shape
+            .retain(|c| std::mem::replace(&mut first, false) || signed_area(c).abs() > SLIVER_AREA);
     }
     region
 }
@@ -124,47 +126,6 @@ pub fn union_all<'a>(regions: impl IntoIterator<Item = &'a Region>) -> Region {
     region_from_contours(&all)
 }
 
-/// The pieces of polylines inside (`inside = true`) or outside a region.
-pub fn clip_lines(lines: &[Vec<Point>], region: &Region, inside: bool) -> Vec<Vec<Point>> {
-    if lines.is_empty() {
-        return Vec::new();
-    }
-    if region.is_empty() {
-        return if inside { Vec::new() } else { lines.to_vec() };
-    }
-    let rule = ClipRule {
-        invert: !inside,
-        boundary_included: false,
-    };
-    lines
-        .to_vec()
-        .clip_by(region, FillRule::NonZero, rule)
-        .into_iter()
-        .filter(|p| p.len() >= 2 && p.windows(2).any(|w| dist(w[0], w[1]) > 1e-9))
-        .collect()
-}
-
-/// The area a polyline of width `w` covers (round caps and joins).
-pub fn stroke(lines: &[Vec<Point>], w: f64) -> Region {
-    if lines.is_empty() || w <= 0.0 {
-        return Vec::new();
-    }
-    let style = StrokeStyle::new(w)
-        .start_cap(LineCap::Round(ROUND_STEP))
-        .end_cap(LineCap::Round(ROUND_STEP))
-        .line_join(LineJoin::Round(ROUND_STEP));
-    let open: Vec<Vec<Point>> = lines.iter().filter(|l| l.len() >= 2).cloned().collect();
-    if open.is_empty() {
-        return Vec::new();
-    }
-    open.stroke(style, false)
-}
-
-/// The shapes of a region, each as its own region (an island with its holes).
-pub fn shapes(region: &Region) -> impl Iterator<Item = Region> + '_ {
-    region.iter().map(|s| vec![s.clone()])
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -180,29 +141,10 @@ mod tests {
         let tab = region_from_contours(&[vec![[10.0, 4.0], [15.0, 4.0], [15.0, 4.5], [10.0, 4.5]]]);
         let r = union(&square(0.0, 10.0), &tab);
         let o = opening(&r, 0.4);
-        assert!((region_area(&o) - 100.0).abs() < 1e-3, "{}", region_area(&o));
-    }
-
-    #[test]
-    fn lines_split_at_the_boundary() {
-        let r = square(0.0, 10.0);
-        let line = vec![vec![[-5.0, 5.0], [15.0, 5.0]]];
-        let inside = clip_lines(&line, &r, true);
-        let outside = clip_lines(&line, &r, false);
-        let len = |ls: &[Vec<Point>]| -> f64 {
-            ls.iter()
-                .map(|l| l.windows(2).map(|w| dist(w[0], w[1])).sum::<f64>())
-                .sum()
-        };
-        assert!((len(&inside) - 10.0).abs() < 1e-6);
-        assert!((len(&outside) - 10.0).abs() < 1e-6);
-        assert_eq!(outside.len(), 2);
-    }
-
-    #[test]
-    fn a_stroke_covers_length_times_width() {
-        let a = region_area(&stroke(&[vec![[0.0, 0.0], [10.0, 0.0]]], 0.4));
-        let want = 10.0 * 0.4 + std::f64::consts::PI * 0.04;
-        assert!((a - want).abs() < 0.01, "{a} vs {want}");
+        assert!(
+            (region_area(&o) - 100.0).abs() < 1e-3,
+            "{}",
+            region_area(&o)
+        );
     }
 }

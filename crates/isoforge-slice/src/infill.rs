@@ -18,6 +18,9 @@ const MIN_PIECE: f64 = 0.05;
 /// per volume, 3.09 / period, times π/4 for a plane section); `infill::tests` measures it.
 const GYROID_LENGTH_PER_AREA: f64 = 2.43;
 
+/// One hatch row: its index, its y and the x intervals inside the region.
+pub type Row = (i64, f64, Vec<(f64, f64)>);
+
 /// Hatch lines in the frame where they run along x: row `k` at height `(k + 0.5)·spacing`
 /// holds the x intervals inside the region, left to right.
 #[derive(Clone, Debug, Default)]
@@ -27,7 +30,7 @@ pub struct Rows {
     /// Distance between rows, mm.
     pub spacing: f64,
     /// (row index, y, intervals) from the lowest row up; empty rows left out.
-    pub rows: Vec<(i64, f64, Vec<(f64, f64)>)>,
+    pub rows: Vec<Row>,
 }
 
 impl Rows {
@@ -112,6 +115,7 @@ pub fn hatch_rows(region: &Region, angle: f64, spacing: f64) -> Rows {
 }
 
 /// Parallel lines `spacing` mm apart at `angle` radians, clipped to `region`.
+#[cfg(test)]
 pub fn hatch(region: &Region, angle: f64, spacing: f64) -> Vec<Vec<Point>> {
     hatch_rows(region, angle, spacing).lines()
 }
@@ -344,8 +348,8 @@ pub fn clip(lines: &[Vec<Point>], region: &Region) -> Vec<Vec<Point>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geom::path_length;
     use crate::clip::region_from_contours;
+    use crate::geom::path_length;
 
     fn square(s: f64) -> Region {
         region_from_contours(&[vec![[0.0, 0.0], [s, 0.0], [s, s], [0.0, s]]])

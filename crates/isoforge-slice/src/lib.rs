@@ -30,14 +30,15 @@ mod medial;
 mod outline;
 mod overhangs;
 mod paths;
+pub mod preview;
 mod profile;
 mod raster;
-mod supports;
-mod surfaces;
-mod walls;
 pub mod sl1;
 mod source;
+mod supports;
+mod surfaces;
 pub mod svx;
+mod walls;
 
 #[cfg(test)]
 mod region_agreement_tests;

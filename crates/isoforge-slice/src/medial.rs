@@ -88,10 +88,7 @@ fn recentre(raw: &[Point], edges: &EdgeIndex, p: f64) -> (Vec<Point>, Vec<f64>) 
         }
         let v = [-dy / l, dx / l];
         let reach = 2.0 * near + 4.0 * p;
-        match (
-            edges.ray(q, v, reach),
-            edges.ray(q, [-v[0], -v[1]], reach),
-        ) {
+        match (edges.ray(q, v, reach), edges.ray(q, [-v[0], -v[1]], reach)) {
             (Some(s), Some(t)) => {
                 let shift = 0.5 * (s - t);
                 pts.push([q[0] + v[0] * shift, q[1] + v[1] * shift]);
@@ -247,9 +244,9 @@ impl Grid {
                     }
                     let (p2, p4, p6, p8) = (n[0], n[2], n[4], n[6]);
                     let ok = if step == 0 {
-                        !(p2 && p4 && p6) && !(p4 && p6 && p8)
+                        !(p4 && p6 && (p2 || p8))
                     } else {
-                        !(p2 && p4 && p8) && !(p2 && p6 && p8)
+                        !(p2 && p8 && (p4 || p6))
                     };
                     if ok {
                         doomed.push(k);
@@ -339,7 +336,7 @@ impl Grid {
         let mut used_edge = std::collections::HashSet::new();
         let key = |a: usize, b: usize| if a < b { (a, b) } else { (b, a) };
         let mut chains = Vec::new();
-        let mut walk = |start: usize, first: usize, used: &mut std::collections::HashSet<_>| {
+        let walk = |start: usize, first: usize, used: &mut std::collections::HashSet<_>| {
             let mut chain = vec![start];
             let (mut prev, mut cur) = (start, first);
             used.insert(key(prev, cur));
@@ -434,7 +431,8 @@ impl EdgeIndex {
     /// if it does within `reach`.
     pub fn ray(&self, q: Point, dir: Point, reach: f64) -> Option<f64> {
         let end = [q[0] + dir[0] * reach, q[1] + dir[1] * reach];
-        let cell = |x: f64, o: f64, n: usize| (((x - o) / self.cell).floor().max(0.0) as usize).min(n - 1);
+        let cell =
+            |x: f64, o: f64, n: usize| (((x - o) / self.cell).floor().max(0.0) as usize).min(n - 1);
         let (i0, i1) = (
             cell(q[0].min(end[0]), self.origin[0], self.nx),
             cell(q[0].max(end[0]), self.origin[0], self.nx),
@@ -535,7 +533,11 @@ mod tests {
                 [10.0 * a.cos(), 10.0 * a.sin()]
             })
             .collect();
-        let inner: Vec<Point> = outer.iter().rev().map(|p| [p[0] * 0.95, p[1] * 0.95]).collect();
+        let inner: Vec<Point> = outer
+            .iter()
+            .rev()
+            .map(|p| [p[0] * 0.95, p[1] * 0.95])
+            .collect();
         let lines = centre_lines(&region_from_contours(&[outer, inner]), 0.05);
         assert_eq!(lines.len(), 1, "{}", lines.len());
         let l = &lines[0];

@@ -41,9 +41,9 @@ impl SteepIndex {
         let (j0, j1) = (cell(a[1].min(b[1])) - 1, cell(a[1].max(b[1])) + 1);
         (i0..=i1).any(|i| {
             (j0..=j1).any(|j| {
-                self.buckets.get(&(i, j)).is_some_and(|v| {
-                    v.iter().any(|q| segment_distance(*q, a, b) <= self.cell)
-                })
+                self.buckets
+                    .get(&(i, j))
+                    .is_some_and(|v| v.iter().any(|q| segment_distance(*q, a, b) <= self.cell))
             })
         })
     }
@@ -101,7 +101,8 @@ mod tests {
 
     #[test]
     fn the_part_beyond_the_layer_below_hangs() {
-        let below = region_from_contours(&[vec![[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]]);
+        let below =
+            region_from_contours(&[vec![[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]]);
         let path = vec![[0.0, 5.0], [20.0, 5.0]];
         let runs = split_wall(&path, Some(&below), &SteepIndex::new(&[], 0.45));
         assert_eq!(runs.len(), 2);

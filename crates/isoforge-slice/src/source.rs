@@ -5,7 +5,7 @@ use isoforge_field::{Bounds, Shape};
 use isoforge_mesh::Mesh;
 
 use crate::SliceError;
-use crate::geom::{Contour, bbox};
+use crate::geom::Contour;
 use crate::outline::mesh::mesh_bounds;
 use crate::outline::{FieldSlicer, MeshSlicer};
 
@@ -122,7 +122,7 @@ pub const MAX_LAYERS: usize = 50_000;
 
 /// How many layers cover `total` mm: the first `first` mm thick, then `height` mm each.
 pub fn layer_count(total: f64, first: f64, height: f64) -> usize {
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return 0;
     }
     let rest = (total - first) / height;
@@ -166,11 +166,6 @@ pub fn check_layer_count(total: f64, first: f64, height: f64) -> Result<(), Slic
         });
     }
     Ok(())
-}
-
-/// The bounding box of a set of layer outlines, `(min, max)`.
-pub fn outlines_bbox(layers: &[Vec<Contour>]) -> Option<([f64; 2], [f64; 2])> {
-    bbox(layers.iter().flatten().flatten())
 }
 
 #[cfg(test)]

@@ -11,11 +11,15 @@
 //! less touches the part. The top layers of either are a dense interface.
 
 use crate::clip::{difference, intersect, offset, opening, union, union_all};
-use crate::geom::{Point, Region, dist, inside_region};
+use crate::geom::{Point, Region, dist, inside_region, signed_area};
 use crate::profile::{FdmSettings, SupportStyle};
 
 /// Sideways clearance between support and part, in line widths (PrusaSlicer: 60%).
 const XY_GAP_PER_LINE: f64 = 0.6;
+
+/// Overhang pieces narrower than this many line widths, or smaller than its square, are
+/// numerical specks, not overhangs.
+const SPECK_PER_LINE: f64 = 0.1;
 
 /// Dense interface layers at the top of a support.
 const INTERFACE_LAYERS: usize = 2;
@@ -47,8 +51,14 @@ impl SupportLayer {
     }
 }
 
-/// The overhang of each layer: what needs support under it.
-pub fn overhangs(regions: &[Region], heights: &[f64], s: &FdmSettings) -> Vec<Region> {
+/// The overhang of each layer: what needs support under it. `printed` is each layer's
+/// region where something is printed (a patch too thin for any line holds nothing up).
+pub fn overhangs(
+    regions: &[Region],
+    printed: &[Region],
+    heights: &[f64],
+    s: &FdmSettings,
+) -> Vec<Region> {
     let w = s.line_width;
     let tan = s.support_overhang_angle.to_radians().tan().min(1e3);
     use rayon::prelude::*;
@@ -58,14 +68,52 @@ pub fn overhangs(regions: &[Region], heights: &[f64], s: &FdmSettings) -> Vec<Re
             if l == 0 {
                 return Vec::new();
             }
-            let lower = offset(&regions[l - 1], heights[l] * tan);
-            opening(&difference(&regions[l], &lower), 0.5 * w)
+            let grow = heights[l] * tan;
+            let lower = offset(&printed[l - 1], grow);
+            // A steep slope leaves a strip narrower than a line on every layer: keep it
+            // (the strips of many layers make the support's area); drop only specks.
+            let mut over = opening(&difference(&regions[l], &lower), SPECK_PER_LINE * w);
+            over.retain(|shape| {
+                shape
+                    .first()
+                    .is_some_and(|c| signed_area(c) > SPECK_PER_LINE * w * w)
+            });
+            if over.is_empty() {
+                return over;
+            }
+            // The whole of the steep part hangs, not only what lies beyond the grown layer
+            // below: grown back toward it (as Slic3r does), or the strips of successive
+            // layers would leave gaps between them.
+            intersect(
+                &offset(&over, grow),
+                &difference(&regions[l], &printed[l - 1]),
+            )
         })
         .collect()
 }
 
-/// Supports for every layer (empty when the profile has none).
-pub fn supports(regions: &[Region], heights: &[f64], s: &FdmSettings) -> Vec<SupportLayer> {
+/// What each layer's support must hold up: the overhangs `gap` layers above the layer
+/// above (nearer where the part starts within the gap of the bed).
+fn needs(over: Vec<Region>, gap: usize) -> Vec<Region> {
+    let mut need = vec![Vec::new(); over.len()];
+    for (l, o) in over.into_iter().enumerate() {
+        if l == 0 || o.is_empty() {
+            continue;
+        }
+        let j = (l - 1).saturating_sub(gap);
+        need[j] = union(&need[j], &o);
+    }
+    need
+}
+
+/// Supports for every layer (empty when the profile has none). `printed` is each layer's
+/// printed region (see [`overhangs`]).
+pub fn supports(
+    regions: &[Region],
+    printed: &[Region],
+    heights: &[f64],
+    s: &FdmSettings,
+) -> Vec<SupportLayer> {
     let n = regions.len();
     if s.supports == SupportStyle::None || n == 0 {
         return vec![SupportLayer::default(); n];
@@ -78,16 +126,19 @@ pub fn supports(regions: &[Region], heights: &[f64], s: &FdmSettings) -> Vec<Sup
     } else {
         0
     };
-    let over = overhangs(regions, heights, s);
+    let need = needs(overhangs(regions, printed, heights, s), gap);
+    // Support keeps clear of what is printed (a sliver of the model too thin for any line
+    // may be covered by support: the tip of a point standing on the bed).
     let blocked: Vec<Region> = {
         use rayon::prelude::*;
-        regions.par_iter().map(|r| offset(r, xy)).collect()
+        printed.par_iter().map(|r| offset(r, xy)).collect()
     };
     let columns = match s.supports {
-        SupportStyle::Tree => tree_columns(&over, &blocked, gap, heights, w),
-        _ => grid_columns(&over, &blocked, gap),
+        SupportStyle::Tree => tree_columns(&need, &blocked, heights, w),
+        _ => grid_columns(&need, &blocked),
     };
-    // Not in the gap above the model below, and not thinner than a line.
+    // Not in the gap above the model below; specks dropped (a support narrower than a line
+    // still gets the lines its hatch finds in it).
     let printed: Vec<Region> = (0..n)
         .map(|j| {
             let mut p = columns[j].clone();
@@ -96,7 +147,7 @@ pub fn supports(regions: &[Region], heights: &[f64], s: &FdmSettings) -> Vec<Sup
                     p = difference(&p, &blocked[b]);
                 }
             }
-            opening(&p, 0.5 * w)
+            opening(&p, SPECK_PER_LINE * w)
         })
         .collect();
     (0..n)
@@ -120,14 +171,12 @@ pub fn supports(regions: &[Region], heights: &[f64], s: &FdmSettings) -> Vec<Sup
 
 /// Straight columns: each layer's support is everything above it that needs holding up,
 /// less the model.
-fn grid_columns(over: &[Region], blocked: &[Region], gap: usize) -> Vec<Region> {
-    let n = over.len();
+fn grid_columns(need: &[Region], blocked: &[Region]) -> Vec<Region> {
+    let n = need.len();
     let mut out = vec![Vec::new(); n];
     let mut carry: Region = Vec::new();
     for j in (0..n).rev() {
-        if let Some(o) = over.get(j + 1 + gap) {
-            carry = union(&carry, o);
-        }
+        carry = union(&carry, &need[j]);
         carry = difference(&carry, &blocked[j]);
         out[j] = carry.clone();
     }
@@ -143,25 +192,17 @@ struct Branch {
 
 /// Tree columns: branches from tips under the overhangs, each leaning toward its nearest
 /// neighbour as it descends (merging when they meet) and away from the model.
-fn tree_columns(
-    over: &[Region],
-    blocked: &[Region],
-    gap: usize,
-    heights: &[f64],
-    w: f64,
-) -> Vec<Region> {
-    let n = over.len();
+fn tree_columns(need: &[Region], blocked: &[Region], heights: &[f64], w: f64) -> Vec<Region> {
+    let n = need.len();
     let mut out = vec![Vec::new(); n];
     let mut branches: Vec<Branch> = Vec::new();
     let lean = TREE_BRANCH_ANGLE.to_radians().tan();
     for j in (0..n).rev() {
-        // New tips under the overhang `gap` layers up.
-        if let Some(o) = over.get(j + 1 + gap) {
-            branches.extend(tips(o).into_iter().map(|at| Branch {
-                at,
-                radius: TREE_TIP_RADIUS.max(w),
-            }));
-        }
+        // New tips under the overhangs this layer holds up.
+        branches.extend(tips(&need[j]).into_iter().map(|at| Branch {
+            at,
+            radius: TREE_TIP_RADIUS.max(w),
+        }));
         if branches.is_empty() {
             continue;
         }
@@ -304,7 +345,7 @@ mod tests {
     #[test]
     fn grid_supports_hold_up_the_table_top_with_a_gap() {
         let (regions, heights) = table();
-        let sup = supports(&regions, &heights, &settings("grid"));
+        let sup = supports(&regions, &regions, &heights, &settings("grid"));
         // Under the top (layer 20, gap one layer): layers 0..=18 hold support, 19 is the gap.
         assert!(sup[19].all().is_empty());
         let a = region_area(&sup[18].all());
@@ -323,17 +364,22 @@ mod tests {
     #[test]
     fn tree_supports_use_less_material_than_columns() {
         let (regions, heights) = table();
-        let grid = supports(&regions, &heights, &settings("grid"));
-        let tree = supports(&regions, &heights, &settings("tree"));
+        let grid = supports(&regions, &regions, &heights, &settings("grid"));
+        let tree = supports(&regions, &regions, &heights, &settings("tree"));
         let total = |s: &[SupportLayer]| s.iter().map(|l| region_area(&l.all())).sum::<f64>();
         assert!(!tree[18].all().is_empty() && !tree[0].all().is_empty());
-        assert!(total(&tree) < 0.7 * total(&grid), "{} vs {}", total(&tree), total(&grid));
+        assert!(
+            total(&tree) < 0.7 * total(&grid),
+            "{} vs {}",
+            total(&tree),
+            total(&grid)
+        );
     }
 
     #[test]
     fn no_supports_when_off() {
         let (regions, heights) = table();
-        let sup = supports(&regions, &heights, &settings("none"));
+        let sup = supports(&regions, &regions, &heights, &settings("none"));
         assert!(sup.iter().all(|s| s.all().is_empty()));
     }
 }

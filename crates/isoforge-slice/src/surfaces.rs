@@ -82,7 +82,10 @@ pub fn classify(
     if !n.on_bed
         && let Some(&below) = n.below.first()
     {
-        let air = opening(&difference(inner, below), 0.5 * BRIDGE_MIN_WIDTH_PER_LINE * w);
+        let air = opening(
+            &difference(inner, below),
+            0.5 * BRIDGE_MIN_WIDTH_PER_LINE * w,
+        );
         if !air.is_empty() {
             let area = intersect(&grow_round(&air, BRIDGE_ANCHOR_PER_LINE * w), inner);
             let anchors = offset(below, 0.25 * w);
@@ -157,7 +160,8 @@ mod tests {
     #[test]
     fn a_deck_between_pillars_is_bridged_along_the_gap() {
         // Pillars at x in [-15, -10] and [10, 15]; the deck spans x in [-15, 15].
-        let below = crate::clip::union(&rect(-15.0, -5.0, -10.0, 5.0), &rect(10.0, -5.0, 15.0, 5.0));
+        let below =
+            crate::clip::union(&rect(-15.0, -5.0, -10.0, 5.0), &rect(10.0, -5.0, 15.0, 5.0));
         let deck = rect(-14.0, -4.0, 14.0, 4.0);
         let above = rect(-15.0, -5.0, 15.0, 5.0);
         let n = Neighbours {

@@ -45,6 +45,7 @@ pub struct Bead {
 
 impl Bead {
     /// True when the bead ends where it starts.
+    #[cfg(test)]
     pub fn closed(&self) -> bool {
         self.points.len() > 2 && self.points.first() == self.points.last()
     }
@@ -205,7 +206,11 @@ fn runs(line: &CentreLine, min_width: f64, two_above: f64) -> Vec<Run> {
 
 /// One line of the local width; segment widths are the mean of their ends'.
 fn single_bead(line: &CentreLine) -> Bead {
-    let widths = line.widths.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+    let widths = line
+        .widths
+        .windows(2)
+        .map(|w| 0.5 * (w[0] + w[1]))
+        .collect();
     Bead {
         points: line.points.clone(),
         widths,
@@ -221,7 +226,11 @@ fn double_bead(line: &CentreLine) -> Bead {
         let b = line.points[(i + 1).min(n - 1)];
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
         let l = dx.hypot(dy);
-        if l > 0.0 { [-dy / l, dx / l] } else { [0.0, 0.0] }
+        if l > 0.0 {
+            [-dy / l, dx / l]
+        } else {
+            [0.0, 0.0]
+        }
     };
     let side = |sign: f64| -> Vec<Point> {
         (0..n)

@@ -160,7 +160,11 @@ fn skirt_fan_retraction_and_progress_are_there() {
             .unwrap();
         assert!(first_outer > last_inner, "layer {layer}: {here:?}");
     }
-    let at = |layer: usize, f: &str| r.extrusions.iter().any(|x| x.layer == Some(layer) && x.feature == f);
+    let at = |layer: usize, f: &str| {
+        r.extrusions
+            .iter()
+            .any(|x| x.layer == Some(layer) && x.feature == f)
+    };
     assert!(at(5, "OVERHANG") && !at(40, "OVERHANG"));
 }
 

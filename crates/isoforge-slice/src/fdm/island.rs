@@ -39,8 +39,6 @@ pub struct LayerContext<'a> {
     pub s: &'a FdmSettings,
     /// The layer's index among the model's layers.
     pub index: usize,
-    /// The layer's thickness, mm.
-    pub height: f64,
     /// The middle of the layer above the bed, mm (gyroid phase).
     pub mid_z: f64,
     /// The layer below grown by half a nozzle (`None` on the bed or a raft).
@@ -53,7 +51,7 @@ impl LayerContext<'_> {
     /// The angle of this layer's lines: 45° and 135° alternate so each layer crosses the
     /// one below.
     pub fn angle(&self) -> f64 {
-        if self.index % 2 == 0 {
+        if self.index.is_multiple_of(2) {
             std::f64::consts::FRAC_PI_4
         } else {
             3.0 * std::f64::consts::FRAC_PI_4
@@ -145,7 +143,12 @@ pub fn island_paths(isl: &Island, ctx: &LayerContext, pos: &mut Point) -> Vec<Ex
         .thin
         .iter()
         .map(|b| bead(Role::ThinWall, b.clone()))
-        .chain(isl.walls.gaps.iter().map(|b| bead(Role::GapFill, b.clone())))
+        .chain(
+            isl.walls
+                .gaps
+                .iter()
+                .map(|b| bead(Role::GapFill, b.clone())),
+        )
         .collect();
     order_nearest(beads, pos, &mut out);
 
@@ -161,12 +164,22 @@ pub fn island_paths(isl: &Island, ctx: &LayerContext, pos: &mut Point) -> Vec<Ex
     let bw = ctx.bridge_width();
     if !sf.internal_bridge.is_empty() {
         let rows = hatch_rows(&sf.internal_bridge, angle, bw);
-        let lines = lay(Role::InternalBridge, lay_rows(&rows, &sf.internal_bridge, Lay::Connected, *pos), bw, Flow::Round);
+        let lines = lay(
+            Role::InternalBridge,
+            lay_rows(&rows, &sf.internal_bridge, Lay::Connected, *pos),
+            bw,
+            Flow::Round,
+        );
         order_nearest(lines, pos, &mut out);
     }
     for (area, bangle) in &sf.bridges {
         let rows = hatch_rows(area, *bangle, bw);
-        let lines = lay(Role::Bridge, lay_rows(&rows, area, Lay::Connected, *pos), bw, Flow::Round);
+        let lines = lay(
+            Role::Bridge,
+            lay_rows(&rows, area, Lay::Connected, *pos),
+            bw,
+            Flow::Round,
+        );
         order_nearest(lines, pos, &mut out);
     }
     // The top surface, narrower and slower, and monotonic if asked.
@@ -216,7 +229,11 @@ fn split_outer(e: Extrusion, ctx: &LayerContext) -> Vec<Extrusion> {
     split_wall(&e.points, ctx.supported, ctx.steep)
         .into_iter()
         .map(|(hangs, pts)| {
-            let role = if hangs { Role::Overhang } else { Role::OuterWall };
+            let role = if hangs {
+                Role::Overhang
+            } else {
+                Role::OuterWall
+            };
             Extrusion::new(role, pts, width, Flow::Layer)
         })
         .collect()
@@ -248,7 +265,12 @@ fn solid_lines(
         out.extend(thin_beads(&thin, &spec).into_iter().map(|b| bead(role, b)));
     }
     let rows = hatch_rows(&thick, angle, width);
-    out.extend(lay(role, lay_rows(&rows, &thick, how, pos), width, Flow::Layer));
+    out.extend(lay(
+        role,
+        lay_rows(&rows, &thick, how, pos),
+        width,
+        Flow::Layer,
+    ));
     out
 }
 
@@ -262,14 +284,15 @@ fn sparse_lines(region: &Region, ctx: &LayerContext, pos: Point) -> Vec<Extrusio
     let angle = ctx.angle();
     if s.infill_density >= 1.0 {
         let rows = hatch_rows(region, angle, w);
-        return lay(Role::Fill, lay_rows(&rows, region, Lay::Connected, pos), w, Flow::Layer);
+        return lay(
+            Role::Fill,
+            lay_rows(&rows, region, Lay::Connected, pos),
+            w,
+            Flow::Layer,
+        );
     }
     let lines = match s.infill_pattern {
-        InfillPattern::Gyroid => gyroid(
-            region,
-            ctx.mid_z,
-            gyroid_period(s.infill_density, w),
-        ),
+        InfillPattern::Gyroid => gyroid(region, ctx.mid_z, gyroid_period(s.infill_density, w)),
         pattern => {
             let angles: &[f64] = match pattern {
                 InfillPattern::Grid => &[
@@ -283,7 +306,8 @@ fn sparse_lines(region: &Region, ctx: &LayerContext, pos: Point) -> Vec<Extrusio
             let mut lines = Vec::new();
             for &a in angles {
                 let mut spacing = w / per_direction;
-                let mut laid = lay_rows(&hatch_rows(region, a, spacing), region, Lay::Connected, pos);
+                let mut laid =
+                    lay_rows(&hatch_rows(region, a, spacing), region, Lay::Connected, pos);
                 // Joins add length: space the lines out so the total keeps the density.
                 let got: f64 = laid.iter().map(|l| polyline_length(l)).sum();
                 if target > 0.0 && (got / target - 1.0).abs() > DENSITY_TOLERANCE {

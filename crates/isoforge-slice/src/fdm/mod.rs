@@ -28,8 +28,6 @@ use crate::surfaces::{Neighbours, classify, split_solid};
 use island::{Island, LayerContext, island_paths, island_walls, wall_spec};
 use plate::{ARRANGE_GAP, LayerSpec, Plate, arrange, merge, slice_object};
 
-pub use plate::OUTLINE_TOLERANCE;
-
 /// Finest outline cell as a fraction of the line width: crossings are refined on the field,
 /// so the cell only has to resolve features, and 1/8 of a line is far below what prints.
 const CELL_PER_LINE_WIDTH: f64 = 1.0 / 8.0;
@@ -286,7 +284,23 @@ fn slice_layers(plate: &Plate, s: &FdmSettings, control: &Control) -> Result<Sli
         });
     control.check()?;
     let heights: Vec<f64> = plate.layers.iter().map(|l| l.height).collect();
-    let supports = supports(&regions, &heights, s);
+    // Where something is printed: islands too thin for any line hold nothing up.
+    let printed: Vec<Region> = islands
+        .par_iter()
+        .map(|isl| {
+            let shapes: Vec<&Region> = isl
+                .iter()
+                .filter(|i| {
+                    !(i.walls.loops.is_empty()
+                        && i.walls.thin.is_empty()
+                        && i.walls.gaps.is_empty())
+                })
+                .map(|i| &i.shape)
+                .collect();
+            union_all(shapes)
+        })
+        .collect();
+    let supports = supports(&regions, &printed, &heights, s);
     let _ = n;
     Ok(Sliced {
         regions,
@@ -317,7 +331,11 @@ fn plan_layers(
         .par_iter()
         .map(|r| offset(r, 0.5 * s.nozzle_diameter))
         .collect();
-    let vase_from = if s.vase_mode { s.bottom_layers.max(1) } else { usize::MAX };
+    let vase_from = if s.vase_mode {
+        s.bottom_layers.max(1)
+    } else {
+        usize::MAX
+    };
     let mut plans: Vec<LayerPlan> = (0..n)
         .into_par_iter()
         .map(|l| {
@@ -326,9 +344,12 @@ fn plan_layers(
             let ctx = LayerContext {
                 s,
                 index: l,
-                height: layer.height,
                 mid_z: layer.top - 0.5 * layer.height,
-                supported: if l == 0 { None } else { Some(&supported[l - 1]) },
+                supported: if l == 0 {
+                    None
+                } else {
+                    Some(&supported[l - 1])
+                },
                 steep: &steep,
             };
             let mut pos: Point = SEAM_TARGET;
@@ -341,10 +362,20 @@ fn plan_layers(
                     union(&first_all, &region_from_contours(&brim_loops))
                 };
                 for c in skirt(&around, s.skirt_loops, s.skirt_distance, w) {
-                    paths.push(Extrusion::new(Role::Skirt, loop_from_seam(&c), w, Flow::Layer));
+                    paths.push(Extrusion::new(
+                        Role::Skirt,
+                        loop_from_seam(&c),
+                        w,
+                        Flow::Layer,
+                    ));
                 }
                 for c in brim_loops {
-                    paths.push(Extrusion::new(Role::Brim, loop_from_seam(&c), w, Flow::Layer));
+                    paths.push(Extrusion::new(
+                        Role::Brim,
+                        loop_from_seam(&c),
+                        w,
+                        Flow::Layer,
+                    ));
                 }
                 if let Some(end) = paths.last().and_then(Extrusion::end) {
                     pos = end;
@@ -378,7 +409,13 @@ fn plan_layers(
         .collect();
     control.check()?;
     let warnings = if s.supports == SupportStyle::None && s.raft_layers == 0 {
-        air_starts(&plans, w)
+        // Lines over sparse infill are held by it across its spacing.
+        let reach = if s.infill_density > 0.0 {
+            (w / s.infill_density).min(AIR_REACH_MAX)
+        } else {
+            w
+        };
+        air_starts(&plans, w, reach.max(w))
     } else {
         Vec::new()
     };
@@ -398,7 +435,12 @@ fn entry_distance(isl: &Island, pos: Point) -> f64 {
         .iter()
         .max_by_key(|l| l.depth)
         .and_then(|l| loop_from_seam(&l.contour).first().copied())
-        .or_else(|| isl.shape.first().and_then(|s| s.first()).and_then(|c| c.first().copied()))
+        .or_else(|| {
+            isl.shape
+                .first()
+                .and_then(|s| s.first())
+                .and_then(|c| c.first().copied())
+        })
         .unwrap_or(pos);
     crate::geom::dist(p, pos)
 }
@@ -417,7 +459,11 @@ fn support_paths(sup: &SupportLayer, l: usize, s: &FdmSettings, pos: &mut Point)
     if !sup.body.is_empty() {
         let angles: Vec<f64> = match s.supports {
             SupportStyle::Grid => vec![0.0, std::f64::consts::FRAC_PI_2],
-            _ => vec![if l % 2 == 0 { 0.0 } else { std::f64::consts::FRAC_PI_2 }],
+            _ => vec![if l.is_multiple_of(2) {
+                0.0
+            } else {
+                std::f64::consts::FRAC_PI_2
+            }],
         };
         let mut lines = Vec::new();
         for a in angles {
@@ -431,7 +477,11 @@ fn support_paths(sup: &SupportLayer, l: usize, s: &FdmSettings, pos: &mut Point)
         order_nearest(lines, pos, &mut out);
     }
     if !sup.interface.is_empty() {
-        let a = if l % 2 == 0 { std::f64::consts::FRAC_PI_4 } else { 3.0 * std::f64::consts::FRAC_PI_4 };
+        let a = if l.is_multiple_of(2) {
+            std::f64::consts::FRAC_PI_4
+        } else {
+            3.0 * std::f64::consts::FRAC_PI_4
+        };
         let rows = hatch_rows(&sup.interface, a, INTERFACE_SPACING_PER_LINE * w);
         let lines = lay_rows(&rows, &sup.interface, Lay::Connected, *pos)
             .into_iter()
@@ -453,10 +503,18 @@ fn vase_paths(islands: &[Island], w: f64) -> Vec<Extrusion> {
                 .iter()
                 .filter(|l| l.depth == 0)
                 .max_by(|a, b| {
-                    crate::geom::signed_area(&a.contour).total_cmp(&crate::geom::signed_area(&b.contour))
+                    crate::geom::signed_area(&a.contour)
+                        .total_cmp(&crate::geom::signed_area(&b.contour))
                 })
         })
-        .map(|l| vec![Extrusion::new(Role::OuterWall, loop_from_seam(&l.contour), w, Flow::Layer)])
+        .map(|l| {
+            vec![Extrusion::new(
+                Role::OuterWall,
+                loop_from_seam(&l.contour),
+                w,
+                Flow::Layer,
+            )]
+        })
         .unwrap_or_default()
 }
 
@@ -467,14 +525,31 @@ fn raft_layers(area: &Region, s: &FdmSettings) -> Vec<LayerPlan> {
     let mut top = 0.0;
     let mut pos = SEAM_TARGET;
     for k in 0..s.raft_layers {
-        let h = if k == 0 { s.first_layer_height } else { s.layer_height };
+        let h = if k == 0 {
+            s.first_layer_height
+        } else {
+            s.layer_height
+        };
         top += h;
-        let spacing = if k == 0 && s.raft_layers > 1 { RAFT_BASE_SPACING_PER_LINE * w } else { w };
-        let angle = if k % 2 == 0 { 0.0 } else { std::f64::consts::FRAC_PI_2 };
+        let spacing = if k == 0 && s.raft_layers > 1 {
+            RAFT_BASE_SPACING_PER_LINE * w
+        } else {
+            w
+        };
+        let angle = if k % 2 == 0 {
+            0.0
+        } else {
+            std::f64::consts::FRAC_PI_2
+        };
         let mut paths = Vec::new();
         if k == 0 {
             for c in skirt(area, s.skirt_loops, s.skirt_distance, w) {
-                paths.push(Extrusion::new(Role::Skirt, loop_from_seam(&c), w, Flow::Layer));
+                paths.push(Extrusion::new(
+                    Role::Skirt,
+                    loop_from_seam(&c),
+                    w,
+                    Flow::Layer,
+                ));
             }
             if let Some(end) = paths.last().and_then(Extrusion::end) {
                 pos = end;
@@ -498,12 +573,20 @@ fn raft_layers(area: &Region, s: &FdmSettings) -> Vec<LayerPlan> {
     out
 }
 
+/// Lines are held by material this far to the side on the layer below at most, mm: sparse
+/// infill leaves gaps of its spacing that the layer above bridges.
+const AIR_REACH_MAX: f64 = 5.0;
+
 /// Islands of printed lines that have nothing printed under them: each layer's lines are
 /// marked on a grid of half-line cells, and a group of touching cells on layer l with no
-/// marked cell within a line on layer l − 1 starts in mid-air.
-fn air_starts(plans: &[LayerPlan], w: f64) -> Vec<SliceWarning> {
+/// marked cell within `reach` on layer l − 1 starts in mid-air.
+fn air_starts(plans: &[LayerPlan], w: f64, reach: f64) -> Vec<SliceWarning> {
     let cell = 0.5 * w;
-    let Some((lo, hi)) = bbox(plans.iter().flat_map(|p| p.paths.iter().flat_map(|e| e.points.iter()))) else {
+    let Some((lo, hi)) = bbox(
+        plans
+            .iter()
+            .flat_map(|p| p.paths.iter().flat_map(|e| e.points.iter())),
+    ) else {
         return Vec::new();
     };
     let nx = ((hi[0] - lo[0]) / cell) as usize + 3;
@@ -522,7 +605,10 @@ fn air_starts(plans: &[LayerPlan], w: f64) -> Vec<SliceWarning> {
                 let steps = (len / (0.5 * cell)).ceil().max(1.0) as usize;
                 for k in 0..=steps {
                     let t = k as f64 / steps as f64;
-                    let p = [seg[0][0] + t * (seg[1][0] - seg[0][0]), seg[0][1] + t * (seg[1][1] - seg[0][1])];
+                    let p = [
+                        seg[0][0] + t * (seg[1][0] - seg[0][0]),
+                        seg[0][1] + t * (seg[1][1] - seg[0][1]),
+                    ];
                     let i = ((p[0] - lo[0]) / cell) as usize + 1;
                     let j = ((p[1] - lo[1]) / cell) as usize + 1;
                     g[j * nx + i] = true;
@@ -532,12 +618,14 @@ fn air_starts(plans: &[LayerPlan], w: f64) -> Vec<SliceWarning> {
         g
     };
     let grids: Vec<Vec<bool>> = plans.par_iter().map(mark).collect();
+    let r = (reach / cell).ceil() as usize;
     let mut out: Vec<SliceWarning> = Vec::new();
     for l in 1..grids.len() {
-        let (below, here) = (&grids[l - 1], &grids[l]);
+        let here = &grids[l];
         if !here.iter().any(|&v| v) {
             continue;
         }
+        let below = dilate(&grids[l - 1], nx, ny, r);
         // Groups of touching marked cells on this layer.
         let mut seen = vec![false; nx * ny];
         for start in 0..here.len() {
@@ -548,31 +636,65 @@ fn air_starts(plans: &[LayerPlan], w: f64) -> Vec<SliceWarning> {
             seen[start] = true;
             let mut held = false;
             while let Some(k) = stack.pop() {
+                held |= below[k];
                 let (i, j) = (k % nx, k / nx);
-                for dj in -2i64..=2 {
-                    for di in -2i64..=2 {
-                        let (a, b) = (i as i64 + di, j as i64 + dj);
-                        if a < 0 || b < 0 || a as usize >= nx || b as usize >= ny {
-                            continue;
-                        }
-                        let q = b as usize * nx + a as usize;
-                        if below[q] {
-                            held = true;
-                        }
-                        if di.abs() <= 1 && dj.abs() <= 1 && here[q] && !seen[q] {
-                            seen[q] = true;
-                            stack.push(q);
-                        }
+                for (di, dj) in [
+                    (-1i64, -1i64),
+                    (0, -1),
+                    (1, -1),
+                    (-1, 0),
+                    (1, 0),
+                    (-1, 1),
+                    (0, 1),
+                    (1, 1),
+                ] {
+                    let (a, b) = (i as i64 + di, j as i64 + dj);
+                    if a < 0 || b < 0 || a as usize >= nx || b as usize >= ny {
+                        continue;
+                    }
+                    let q = b as usize * nx + a as usize;
+                    if here[q] && !seen[q] {
+                        seen[q] = true;
+                        stack.push(q);
                     }
                 }
             }
             if !held {
                 let z = plans[l].top;
-                if !out.iter().any(|wn| matches!(wn, SliceWarning::StartsInAir { layer, .. } if *layer == l)) {
+                if !out
+                    .iter()
+                    .any(|wn| matches!(wn, SliceWarning::StartsInAir { layer, .. } if *layer == l))
+                {
                     out.push(SliceWarning::StartsInAir { z, layer: l });
                 }
             }
         }
     }
     out
+}
+
+/// Every cell within `r` cells (a square) of a marked one.
+fn dilate(g: &[bool], nx: usize, ny: usize, r: usize) -> Vec<bool> {
+    let pass = |src: &[bool], len: usize, lines: usize, at: &dyn Fn(usize, usize) -> usize| {
+        let mut dst = vec![false; src.len()];
+        for line in 0..lines {
+            // A running count of marked cells in the window [i - r, i + r].
+            let mut count = 0usize;
+            for i in 0..len.min(r) {
+                count += usize::from(src[at(line, i)]);
+            }
+            for i in 0..len {
+                if i + r < len {
+                    count += usize::from(src[at(line, i + r)]);
+                }
+                if i > r {
+                    count -= usize::from(src[at(line, i - r - 1)]);
+                }
+                dst[at(line, i)] = count > 0;
+            }
+        }
+        dst
+    };
+    let rows = pass(g, nx, ny, &|j, i| j * nx + i);
+    pass(&rows, ny, nx, &|i, j| j * nx + i)
 }

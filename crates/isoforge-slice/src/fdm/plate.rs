@@ -15,6 +15,12 @@ use super::Control;
 /// dense contours from slowing polygon offsetting (docs/constants.md).
 pub const OUTLINE_TOLERANCE: f64 = 0.005;
 
+/// One layer of one object: its outline and its steep outline points.
+type SlicedLayer = (Vec<Contour>, Vec<Point>);
+
+/// A row of the bed arrangement: the items with their x, the row's width and height.
+type Shelf = (Vec<(usize, f64)>, f64, f64);
+
 /// Free space kept between arranged objects, mm (PrusaSlicer's arrangement keeps about 6).
 pub const ARRANGE_GAP: f64 = 6.0;
 
@@ -57,7 +63,7 @@ pub fn slice_object(
     let model = source.prepare(spec.cell, OUTLINE_TOLERANCE)?;
     check_layer_count(model.z_range.1 - model.z_range.0, spec.first, spec.height)?;
     let layers = layer_stack(model.z_range, spec.first, spec.height);
-    let sliced: Vec<Result<(Vec<Contour>, Vec<Point>), SliceError>> = layers
+    let sliced: Vec<Result<SlicedLayer, SliceError>> = layers
         .par_iter()
         .map(|l| {
             if control.cancelled() {
@@ -142,7 +148,7 @@ pub fn arrange(
     items.sort_by(|&a, &b| size(&objects[b])[1].total_cmp(&size(&objects[a])[1]));
     // Shelf packing: fill a row left to right, then start the next one above it.
     let usable = bed[0] - 2.0 * margin;
-    let mut rows: Vec<(Vec<(usize, f64)>, f64, f64)> = Vec::new(); // (items with x, width, height)
+    let mut rows: Vec<Shelf> = Vec::new();
     for &o in &items {
         let [w, h] = size(&objects[o]);
         match rows.last_mut() {
@@ -190,8 +196,6 @@ pub struct Plate {
     pub outlines: Vec<Vec<Contour>>,
     /// Steep outline points per layer, bed coordinates.
     pub steep: Vec<Vec<Point>>,
-    /// Where each copy went.
-    pub placements: Vec<Placement>,
     /// The first object's model-to-bed translation.
     pub offset: [f64; 3],
 }
@@ -232,7 +236,6 @@ pub fn merge(objects: &[ObjectLayers], placements: Vec<Placement>) -> Plate {
         layers,
         outlines,
         steep,
-        placements,
         offset,
     }
 }
@@ -254,7 +257,13 @@ mod tests {
     #[test]
     fn one_object_goes_to_the_centre() {
         let p = arrange(&[object(20.0, 10.0)], 1, [220.0, 220.0], 6.0, 3.0).unwrap();
-        assert_eq!(p, vec![Placement { object: 0, at: [110.0, 110.0] }]);
+        assert_eq!(
+            p,
+            vec![Placement {
+                object: 0,
+                at: [110.0, 110.0]
+            }]
+        );
     }
 
     #[test]
@@ -266,7 +275,10 @@ mod tests {
             .iter()
             .map(|pl| {
                 let (lo, hi) = objs[pl.object].footprint;
-                ([lo[0] + pl.at[0], lo[1] + pl.at[1]], [hi[0] + pl.at[0], hi[1] + pl.at[1]])
+                (
+                    [lo[0] + pl.at[0], lo[1] + pl.at[1]],
+                    [hi[0] + pl.at[0], hi[1] + pl.at[1]],
+                )
             })
             .collect();
         for (i, a) in boxes.iter().enumerate() {

@@ -10,6 +10,10 @@ use crate::profile::FdmSettings;
 use super::moves::{Kind, Op, blocks};
 use super::planner::{Limits, block_times};
 
+/// Cooling aims this share above the minimum layer time, so rounding in the file (feed
+/// rates in whole mm/min, waits in whole ms) cannot take a layer under it.
+const COOLING_MARGIN: f64 = 0.01;
+
 /// The head lifts this far off the part while it waits for a layer to cool, mm.
 const DWELL_LIFT: f64 = 2.0;
 
@@ -21,22 +25,56 @@ pub fn layer_time(ops: &[Op], from: [f64; 3], s: &FdmSettings) -> (f64, f64) {
     };
     let times = block_times(&bl.iter().map(|b| b.0).collect::<Vec<_>>(), limits);
     let total = times.iter().sum();
-    let extruding = times.iter().zip(&bl).filter(|(_, b)| b.1).map(|(t, _)| t).sum();
+    let extruding = times
+        .iter()
+        .zip(&bl)
+        .filter(|(_, b)| b.1)
+        .map(|(t, _)| t)
+        .sum();
+    (total, extruding)
+}
+
+/// The time a layer's moves take at the speeds asked, as if the head accelerated at once,
+/// and the part of it spent extruding, s. A printer can only take longer, so a layer held
+/// to the minimum layer time by this clock is held to it on every printer and by every
+/// reader of the file.
+pub fn feed_time(ops: &[Op], from: [f64; 3]) -> (f64, f64) {
+    let mut at = from;
+    let (mut total, mut extruding) = (0.0, 0.0);
+    for op in ops {
+        match op {
+            Op::Move { to, de, feed, kind } => {
+                let d =
+                    ((to[0] - at[0]).powi(2) + (to[1] - at[1]).powi(2) + (to[2] - at[2]).powi(2))
+                        .sqrt();
+                at = *to;
+                if *feed > 0.0 {
+                    let t = d.max(de.abs()) / feed;
+                    total += t;
+                    if matches!(kind, Kind::Extrude(..)) {
+                        extruding += t;
+                    }
+                }
+            }
+            Op::Dwell(t) => total += t,
+            Op::Feature(_) | Op::Fan(_) => {}
+        }
+    }
     (total, extruding)
 }
 
 /// Slows the layer down to the minimum layer time, adds a lifted wait if slowing is not
-/// enough, and sets the fan. Returns the layer's time, s.
+/// enough, and sets the fan. Returns the layer's time as Marlin's planner takes it, s.
 pub fn cool_layer(ops: &mut Vec<Op>, from: [f64; 3], index: usize, s: &FdmSettings) -> f64 {
-    let (t0, _) = layer_time(ops, from, s);
-    let mut t = t0;
-    if s.min_layer_time > 0.0 && t < s.min_layer_time {
+    let (t0, _) = feed_time(ops, from);
+    // Aim a little above the minimum: the file rounds feed rates to mm/min and waits to ms.
+    let target = s.min_layer_time * (1.0 + COOLING_MARGIN);
+    if s.min_layer_time > 0.0 && t0 < target {
         for _ in 0..4 {
-            let (total, extruding) = layer_time(ops, from, s);
-            t = total;
+            let (total, extruding) = feed_time(ops, from);
             let other = total - extruding;
-            let want = s.min_layer_time - other;
-            if total >= s.min_layer_time - 1e-3 || extruding <= 0.0 || want <= extruding {
+            let want = target - other;
+            if total >= target || extruding <= 0.0 || want <= extruding {
                 break;
             }
             let factor = extruding / want;
@@ -59,8 +97,8 @@ pub fn cool_layer(ops: &mut Vec<Op>, from: [f64; 3], index: usize, s: &FdmSettin
                 break;
             }
         }
-        t = layer_time(ops, from, s).0;
-        if t < s.min_layer_time - 1e-3 {
+        let t = feed_time(ops, from).0;
+        if t < target {
             let at = last_position(ops).unwrap_or(from);
             let lift = (at[2] + DWELL_LIFT).min(s.max_height);
             let z_feed = s.machine_max_feedrate_z.min(s.travel_speed);
@@ -72,13 +110,12 @@ pub fn cool_layer(ops: &mut Vec<Op>, from: [f64; 3], index: usize, s: &FdmSettin
                     kind: Kind::Z,
                 });
             }
-            let lifted = layer_time(ops, from, s).0;
-            ops.push(Op::Dwell((s.min_layer_time - lifted).max(0.0)));
-            t = layer_time(ops, from, s).0;
+            let lifted = feed_time(ops, from).0;
+            ops.push(Op::Dwell((target - lifted).max(0.0)));
         }
     }
     set_fan(ops, t0, index, s);
-    t
+    layer_time(ops, from, s).0
 }
 
 /// Where the last move of `ops` ends.
@@ -93,7 +130,11 @@ fn last_position(ops: &[Op]) -> Option<[f64; 3]> {
 fn fan_for_time(t: f64, s: &FdmSettings) -> f64 {
     let (full, least) = (s.fan_speed, s.min_fan_speed.min(s.fan_speed));
     if t <= s.min_layer_time || s.fan_below_layer_time <= s.min_layer_time {
-        if t < s.fan_below_layer_time { full } else { least }
+        if t < s.fan_below_layer_time {
+            full
+        } else {
+            least
+        }
     } else if t < s.fan_below_layer_time {
         let k = (t - s.min_layer_time) / (s.fan_below_layer_time - s.min_layer_time);
         full + (least - full) * k
@@ -116,7 +157,11 @@ fn ramp(index: usize, s: &FdmSettings) -> f64 {
 /// overhangs.
 fn set_fan(ops: &mut Vec<Op>, t: f64, index: usize, s: &FdmSettings) {
     let base = fan_for_time(t, s) * ramp(index, s);
-    let bridge = if index == 0 { base } else { base.max(s.bridge_fan_speed) };
+    let bridge = if index == 0 {
+        base
+    } else {
+        base.max(s.bridge_fan_speed)
+    };
     let mut out = Vec::with_capacity(ops.len() + 8);
     out.push(Op::Fan(base));
     let mut current = base;
@@ -170,7 +215,11 @@ mod tests {
         let slowest = ops
             .iter()
             .filter_map(|o| match o {
-                Op::Move { feed, kind: Kind::Extrude(..), .. } => Some(*feed),
+                Op::Move {
+                    feed,
+                    kind: Kind::Extrude(..),
+                    ..
+                } => Some(*feed),
                 _ => None,
             })
             .fold(f64::INFINITY, f64::min);

@@ -69,7 +69,11 @@ pub fn layer_ops(plan: &LayerPlan, index: usize, s: &FdmSettings, head: &mut Hea
         s,
         ops: Vec::with_capacity(plan.paths.iter().map(|p| p.points.len() + 4).sum()),
         head,
-        comb: if s.combing { Some(Comb::new(&plan.comb)) } else { None },
+        comb: if s.combing {
+            Some(Comb::new(&plan.comb))
+        } else {
+            None
+        },
         plan,
         first_layer: index == 0,
         last: None,
@@ -123,7 +127,8 @@ impl Builder<'_> {
         }
         self.head.retracted = true;
         let mut left = s.retract_length;
-        if wipe && s.wipe
+        if wipe
+            && s.wipe
             && let Some(path) = self.last.and_then(|k| self.plan.paths.get(k))
         {
             let pts: Vec<Point> = path.points.iter().rev().copied().collect();
@@ -139,7 +144,10 @@ impl Builder<'_> {
                     continue;
                 }
                 let take = d.min(WIPE_DISTANCE - walked);
-                let to = [from[0] + (p[0] - from[0]) * take / d, from[1] + (p[1] - from[1]) * take / d];
+                let to = [
+                    from[0] + (p[0] - from[0]) * take / d,
+                    from[1] + (p[1] - from[1]) * take / d,
+                ];
                 let de = s.retract_length * take / WIPE_DISTANCE;
                 // Keep the extruder within its retraction speed.
                 let feed = s.travel_speed.min(s.retract_speed * take / de.max(1e-9));
@@ -161,7 +169,12 @@ impl Builder<'_> {
         }
         self.head.retracted = false;
         let at = self.head.at;
-        self.push_move(at, self.s.retract_length, self.s.retract_speed, Kind::Unretract);
+        self.push_move(
+            at,
+            self.s.retract_length,
+            self.s.retract_speed,
+            Kind::Unretract,
+        );
     }
 
     /// Travels to `to`: along a combed route without retracting when one exists, else
@@ -184,7 +197,9 @@ impl Builder<'_> {
                 let keep = crate::geom::simplify_open(&full, ROUTE_TOLERANCE);
                 for &i in keep.iter().skip(1) {
                     let p = full[i];
-                    if dist(p, [self.head.at[0], self.head.at[1]]) > 1e-6 || (self.head.at[2] - z).abs() > 1e-9 {
+                    if dist(p, [self.head.at[0], self.head.at[1]]) > 1e-6
+                        || (self.head.at[2] - z).abs() > 1e-9
+                    {
                         self.push_move([p[0], p[1], z], 0.0, v, Kind::Travel);
                     }
                 }
@@ -199,7 +214,12 @@ impl Builder<'_> {
         }
         if s.z_hop > 0.0 && d > 1e-9 {
             let at = self.head.at;
-            self.push_move([at[0], at[1], at[2] + s.z_hop], 0.0, s.machine_max_feedrate_z.min(v), Kind::Z);
+            self.push_move(
+                [at[0], at[1], at[2] + s.z_hop],
+                0.0,
+                s.machine_max_feedrate_z.min(v),
+                Kind::Z,
+            );
             let at = self.head.at;
             self.push_move([to[0], to[1], at[2]], 0.0, v, Kind::Travel);
             self.z_move(z);
@@ -242,7 +262,12 @@ impl Builder<'_> {
             }
             *along += d;
             let de = d * area_per_width(width) / filament;
-            self.push_move([seg[1][0], seg[1][1], z_at(*along)], de, feed, Kind::Extrude(path.role, width));
+            self.push_move(
+                [seg[1][0], seg[1][1], z_at(*along)],
+                de,
+                feed,
+                Kind::Extrude(path.role, width),
+            );
         }
     }
 }
@@ -259,7 +284,11 @@ pub fn speed(role: Role, s: &FdmSettings, first_layer: bool) -> f64 {
         Role::Support | Role::SupportInterface => s.support_material_speed,
         Role::Ironing => s.ironing_speed,
     };
-    if first_layer { v.min(s.first_layer_speed) } else { v }
+    if first_layer {
+        v.min(s.first_layer_speed)
+    } else {
+        v
+    }
 }
 
 /// True when the travel `a`-`b` crosses an edge of any contour.

@@ -38,7 +38,8 @@ pub fn block_times(blocks: &[Block], limits: Limits) -> Vec<f64> {
         let (a, b) = (&blocks[i - 1], &blocks[i]);
         max_entry[i] = match (a.dir, b.dir) {
             (Some(u), Some(v)) if a.pause == 0.0 => {
-                let junction = junction_speed(u, v, b.accel.min(a.accel), limits.junction_deviation);
+                let junction =
+                    junction_speed(u, v, b.accel.min(a.accel), limits.junction_deviation);
                 junction.min(a.speed).min(b.speed)
             }
             _ => 0.0,
@@ -99,7 +100,9 @@ fn trapezoid(d: f64, v0: f64, v1: f64, vmax: f64, a: f64) -> f64 {
     if d_acc + d_dec <= d {
         (vmax - v0) / a + (vmax - v1) / a + (d - d_acc - d_dec) / vmax
     } else {
-        let peak = ((2.0 * a * d + v0 * v0 + v1 * v1) * 0.5).sqrt().max(v0.max(v1));
+        let peak = ((2.0 * a * d + v0 * v0 + v1 * v1) * 0.5)
+            .sqrt()
+            .max(v0.max(v1));
         (peak - v0) / a + (peak - v1) / a
     }
 }
@@ -134,12 +137,25 @@ mod tests {
 
     #[test]
     fn straight_runs_keep_speed_and_corners_slow_down() {
-        let straight = block_times(&[line(10.0, [1.0, 0.0, 0.0]), line(10.0, [1.0, 0.0, 0.0])], LIMITS);
+        let straight = block_times(
+            &[line(10.0, [1.0, 0.0, 0.0]), line(10.0, [1.0, 0.0, 0.0])],
+            LIMITS,
+        );
         let one = block_times(&[line(20.0, [1.0, 0.0, 0.0])], LIMITS);
         assert!((straight.iter().sum::<f64>() - one[0]).abs() < 1e-9);
-        let corner = block_times(&[line(10.0, [1.0, 0.0, 0.0]), line(10.0, [0.0, 1.0, 0.0])], LIMITS);
-        let reverse = block_times(&[line(10.0, [1.0, 0.0, 0.0]), line(10.0, [-1.0, 0.0, 0.0])], LIMITS);
-        let (c, r, s) = (corner.iter().sum::<f64>(), reverse.iter().sum::<f64>(), one[0]);
+        let corner = block_times(
+            &[line(10.0, [1.0, 0.0, 0.0]), line(10.0, [0.0, 1.0, 0.0])],
+            LIMITS,
+        );
+        let reverse = block_times(
+            &[line(10.0, [1.0, 0.0, 0.0]), line(10.0, [-1.0, 0.0, 0.0])],
+            LIMITS,
+        );
+        let (c, r, s) = (
+            corner.iter().sum::<f64>(),
+            reverse.iter().sum::<f64>(),
+            one[0],
+        );
         assert!(s < c && c < r, "{s} {c} {r}");
         // A right angle at JD 0.013, 1000 mm/s²: v = sqrt(1000·0.013·0.7071/0.2929) ≈ 5.6 mm/s.
         let v = junction_speed([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 1000.0, 0.013);

@@ -37,7 +37,10 @@ impl<'a> Comb<'a> {
     /// A route from `a` to `b` inside the region (the points after `a`, ending at `b`), or
     /// `None` when there is none this simple.
     pub fn route(&self, a: Point, b: Point) -> Option<Vec<Point>> {
-        if self.contours.is_empty() || !inside_region(a, self.region) || !inside_region(b, self.region) {
+        if self.contours.is_empty()
+            || !inside_region(a, self.region)
+            || !inside_region(b, self.region)
+        {
             return None;
         }
         // Every crossing of a-b with a contour edge: (t along a-b, contour, edge index).
@@ -62,7 +65,7 @@ impl<'a> Comb<'a> {
             return Some(vec![b]);
         }
         hits.sort_by(|x, y| x.0.total_cmp(&y.0));
-        if hits.len() % 2 != 0 {
+        if !hits.len().is_multiple_of(2) {
             return None;
         }
         let mut route = Vec::new();
@@ -163,9 +166,18 @@ mod tests {
         full.extend(&route);
         for w in full.windows(2) {
             let mid = [(w[0][0] + w[1][0]) / 2.0, (w[0][1] + w[1][1]) / 2.0];
-            assert!(inside_region(mid, &r) || !crate::geom::inside_region(mid, &ring()), "{mid:?}");
+            assert!(
+                inside_region(mid, &r) || !crate::geom::inside_region(mid, &ring()),
+                "{mid:?}"
+            );
             // Never over the hole.
-            assert!(!(mid[0] > 4.0 + 1e-9 && mid[0] < 16.0 - 1e-9 && mid[1] > 4.0 + 1e-9 && mid[1] < 16.0 - 1e-9), "{mid:?}");
+            assert!(
+                !(mid[0] > 4.0 + 1e-9
+                    && mid[0] < 16.0 - 1e-9
+                    && mid[1] > 4.0 + 1e-9
+                    && mid[1] < 16.0 - 1e-9),
+                "{mid:?}"
+            );
         }
         assert_eq!(route.last(), Some(&[18.0, 10.0]));
     }

@@ -274,7 +274,13 @@ pub const KEYS: &[KeySpec] = &[
         real(1.0, 1000.0),
         Fdm,
     ),
-    key("ironing_speed", "ironing speed", "mm/s", real(1.0, 1000.0), Fdm),
+    key(
+        "ironing_speed",
+        "ironing speed",
+        "mm/s",
+        real(1.0, 1000.0),
+        Fdm,
+    ),
     // Top surfaces are often printed a little narrower than the nozzle for a smooth finish;
     // the same 0.5 to 3 nozzle widths as line_width are checked in validate().
     key(
@@ -300,8 +306,20 @@ pub const KEYS: &[KeySpec] = &[
         real(0.0, 1.0),
         Fdm,
     ),
-    key("thin_walls", "walls thinner than two lines printed (bool)", "", None, Fdm),
-    key("gap_fill", "gaps between walls filled (bool)", "", None, Fdm),
+    key(
+        "thin_walls",
+        "walls thinner than two lines printed (bool)",
+        "",
+        None,
+        Fdm,
+    ),
+    key(
+        "gap_fill",
+        "gaps between walls filled (bool)",
+        "",
+        None,
+        Fdm,
+    ),
     key(
         "top_fill_pattern",
         "\"monotonic\" or \"rectilinear\"",
@@ -327,8 +345,20 @@ pub const KEYS: &[KeySpec] = &[
         real(0.0, 2.0),
         Fdm,
     ),
-    key("brim_width", "brim around the first layer", "mm", real(0.0, 50.0), Fdm),
-    key("raft_layers", "raft layers under the part", "", whole(0.0, 10.0), Fdm),
+    key(
+        "brim_width",
+        "brim around the first layer",
+        "mm",
+        real(0.0, 50.0),
+        Fdm,
+    ),
+    key(
+        "raft_layers",
+        "raft layers under the part",
+        "",
+        whole(0.0, 10.0),
+        Fdm,
+    ),
     // Cooling: PLA wants 5-15 s a layer; two minutes covers any material.
     key(
         "min_layer_time",
@@ -366,9 +396,27 @@ pub const KEYS: &[KeySpec] = &[
         Fdm,
     ),
     // Travel: lifts of a few tenths clear a bumpy top; 10 mm is a generous ceiling.
-    key("z_hop", "lift on retracted travel", "mm", real(0.0, 10.0), Fdm),
-    key("wipe", "wipe the nozzle along the path on retraction (bool)", "", None, Fdm),
-    key("combing", "travel inside the part without retracting (bool)", "", None, Fdm),
+    key(
+        "z_hop",
+        "lift on retracted travel",
+        "mm",
+        real(0.0, 10.0),
+        Fdm,
+    ),
+    key(
+        "wipe",
+        "wipe the nozzle along the path on retraction (bool)",
+        "",
+        None,
+        Fdm,
+    ),
+    key(
+        "combing",
+        "travel inside the part without retracting (bool)",
+        "",
+        None,
+        Fdm,
+    ),
     // The planner's limits (Marlin's M201/M204/M205 J): hobby printers accelerate at
     // 500-5000 mm/s²; junction deviation is 0.01-0.1 mm.
     key(
@@ -400,8 +448,20 @@ pub const KEYS: &[KeySpec] = &[
         real(0.5, 100.0),
         Fdm,
     ),
-    key("vase_mode", "one spiral outer wall, no top (bool)", "", None, Fdm),
-    key("copies", "copies arranged on the bed", "", whole(1.0, 100.0), Fdm),
+    key(
+        "vase_mode",
+        "one spiral outer wall, no top (bool)",
+        "",
+        None,
+        Fdm,
+    ),
+    key(
+        "copies",
+        "copies arranged on the bed",
+        "",
+        whole(1.0, 100.0),
+        Fdm,
+    ),
     key("start_gcode", "start G-code template", "", None, Fdm),
     key("end_gcode", "end G-code template", "", None, Fdm),
     // Resin displays have pixels of about 20-80 µm.
@@ -450,8 +510,20 @@ pub const KEYS: &[KeySpec] = &[
         None,
         Resin,
     ),
-    key("display_mirror_x", "image mirrored in x (bool)", "", None, Resin),
-    key("display_mirror_y", "image mirrored in y (bool)", "", None, Resin),
+    key(
+        "display_mirror_x",
+        "image mirrored in x (bool)",
+        "",
+        None,
+        Resin,
+    ),
+    key(
+        "display_mirror_y",
+        "image mirrored in y (bool)",
+        "",
+        None,
+        Resin,
+    ),
     key(
         "printer_model",
         "printer model written to SL1 (text)",
@@ -494,7 +566,10 @@ pub fn markdown_rows() -> Vec<String> {
     let resin = super::Profile::default_resin();
     KEYS.iter()
         .map(|s| {
-            let is_flag = matches!(fdm.raw(s.key).or(resin.raw(s.key)), Some(toml::Value::Boolean(_)));
+            let is_flag = matches!(
+                fdm.raw(s.key).or(resin.raw(s.key)),
+                Some(toml::Value::Boolean(_))
+            );
             let range = match s.range {
                 Some(r) => super::error::range_text(&r, ""),
                 None if is_flag => "true or false".to_string(),
