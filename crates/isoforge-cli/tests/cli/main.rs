@@ -4,6 +4,7 @@
 //! workspace is linked once.
 
 mod bad_scripts;
+mod calibration;
 mod check;
 mod help;
 mod info;
