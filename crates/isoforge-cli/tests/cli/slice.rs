@@ -447,3 +447,84 @@ fn malformed_overrides_are_usage_errors() {
         assert!(err.contains(&format!("--set {set}")), "{set}: {err}");
     }
 }
+
+#[test]
+fn several_models_share_the_bed_and_copies_multiply_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let cube = fixtures().join("slice/cube.rhai");
+    let pins = fixtures().join("slice/pins.rhai");
+    let one = dir.path().join("one.gcode");
+    let two = dir.path().join("two.gcode");
+    let four = dir.path().join("four.gcode");
+    let a = slice_json(&[s(&cube), "-o", s(&one)]);
+    let b = slice_json(&[s(&cube), s(&pins), "-o", s(&two)]);
+    let c = slice_json(&[s(&cube), "--set", "copies=4", "-o", s(&four)]);
+    // The plate is as tall as its tallest object (the cube: 20 mm in 0.2 mm layers).
+    assert_eq!(a["layers"].as_u64(), Some(100));
+    assert_eq!(b["layers"].as_u64(), Some(100));
+    let f = |v: &serde_json::Value| v["filament_mm"].as_f64().unwrap();
+    // The pins add filament; four cubes take about four times one (one skirt around all).
+    assert!(f(&b) > f(&a) * 1.02, "{} vs {}", f(&b), f(&a));
+    assert!((f(&c) / f(&a) - 4.0).abs() < 0.2, "{} vs {}", f(&c), f(&a));
+    // The copies stand apart: the part's extrusions fill four separate squares.
+    let r = check::parse(&std::fs::read_to_string(&four).unwrap()).unwrap();
+    let (w, h) = (r.max[0] - r.min[0], r.max[1] - r.min[1]);
+    assert!(w > 40.0 && h > 40.0, "{w} x {h}");
+    // Layer images take one model.
+    let run = isoforge(&[
+        "slice",
+        s(&cube),
+        s(&pins),
+        "--png-dir",
+        s(&dir.path().join("png")),
+    ]);
+    assert_eq!(run.status.code(), Some(2));
+}
+
+#[test]
+fn preview_layers_draws_the_chosen_layers_in_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bridge.gcode");
+    let pictures = dir.path().join("pictures");
+    slice_json(&[
+        s(&fixtures().join("slice/bridge.rhai")),
+        "-o",
+        s(&out),
+        "--preview-layers",
+        s(&pictures),
+        "--preview-at",
+        "0,50",
+    ]);
+    let mut names: Vec<_> = std::fs::read_dir(&pictures)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["layer-00000.png", "layer-00050.png"]);
+    // Layer 50 is the deck's first layer: bridge lines in their own colour.
+    let bridge = isoforge_slice::preview::colour("BRIDGE");
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(pictures.join("layer-00050.png")).unwrap(),
+    ));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let px = info.color_type.samples();
+    let bridged = buf[..info.buffer_size()]
+        .chunks(px)
+        .filter(|p| p[..3] == bridge)
+        .count();
+    assert!(bridged > 1000, "{bridged} bridge-coloured pixels");
+    // A layer the print does not have is a usage error.
+    let run = isoforge(&[
+        "slice",
+        s(&fixtures().join("slice/bridge.rhai")),
+        "-o",
+        s(&dir.path().join("b.gcode")),
+        "--preview-layers",
+        s(&dir.path().join("p2")),
+        "--preview-at",
+        "999",
+    ]);
+    assert_eq!(run.status.code(), Some(2));
+}
