@@ -22,6 +22,7 @@ mod adhesion;
 mod bridges;
 pub mod check;
 mod clip;
+pub mod display;
 mod fdm;
 mod gcode;
 mod geom;
@@ -43,6 +44,7 @@ mod walls;
 #[cfg(test)]
 mod region_agreement_tests;
 
+pub use display::DisplayFrame;
 pub use fdm::{Control, GcodeJob, Progress, SliceWarning, slice_gcode, slice_plate};
 pub use gcode::GcodeStats;
 pub use paths::Role;

@@ -9,8 +9,9 @@ use anyhow::{Result, bail};
 use clap::{ArgGroup, Args};
 use isoforge_mesh::Mesh;
 use isoforge_slice::{
-    Control, GridSpec, Origin, Profile, ProfileError, ProfileErrorKind, SliceError, Source,
-    Technology, check, preview, render_layers, sl1, slice_plate, svx,
+    Control, DisplayFrame, DisplayOrientation, GridSpec, Origin, Profile, ProfileError,
+    ProfileErrorKind, SliceError, Source, Technology, check, preview, render_layers, sl1,
+    slice_plate, svx,
 };
 
 use isoforge_output::{Options, OutputFile, OutputFolder};
@@ -282,6 +283,11 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
             width: r.resolution[0],
             height: r.resolution[1],
             pixel: r.pixel_size,
+            frame: DisplayFrame {
+                portrait: r.display_orientation == DisplayOrientation::Portrait,
+                mirror_x: r.display_mirror_x,
+                mirror_y: r.display_mirror_y,
+            },
         }
     };
     let images = render_layers(&source, r.layer_height, spec, &progress).map_err(slice_error)?;
@@ -347,8 +353,8 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
             "{}: {} layers of {} x {} pixels; sliced in {:.2} s",
             written.display(),
             images.layers.len(),
-            images.grid.width,
-            images.grid.height,
+            images.image_size()[0],
+            images.image_size()[1],
             seconds
         );
     }
