@@ -2,7 +2,7 @@
 //! would do with it, so tests judge the output and not the slicer's intentions.
 //!
 //! It follows G0/G1/G92/G90/G91/M82/M83 and G28, collects every extruding move with its
-//! layer (from `;LAYER:n`) and feature (`;TYPE:`), the temperatures set before the first
+//! layer (from `;LAYER:n`, or PrusaSlicer's `;LAYER_CHANGE`) and feature (`;TYPE:`), the temperatures set before the first
 //! extrusion, and the travel envelope.
 
 mod bridges;
@@ -113,6 +113,11 @@ pub fn parse(text: &str) -> Result<GcodeReport, CheckError> {
                         line: n,
                         message: format!("bad layer marker {m:?}"),
                     })?;
+                    layer = Some(k);
+                    r.layers.push((k, None));
+                } else if m == "LAYER_CHANGE" {
+                    // PrusaSlicer's and Slic3r's marker: layers counted from 0.
+                    let k = r.layers.len();
                     layer = Some(k);
                     r.layers.push((k, None));
                 } else if let Some(v) = m.strip_prefix("Z:") {
@@ -293,6 +298,14 @@ impl GcodeReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn prusaslicer_layer_changes_count_layers() {
+        let g = "G90\nM82\nG92 E0\n;LAYER_CHANGE\n;Z:0.2\nG1 X1 Y0 E1\n;LAYER_CHANGE\n;Z:0.4\nG1 X2 E2\n";
+        let r = parse(g).unwrap();
+        assert_eq!(r.layers, [(0, Some(0.2)), (1, Some(0.4))]);
+        assert_eq!(r.extrusions[1].layer, Some(1));
+    }
 
     #[test]
     fn follows_absolute_and_relative_extrusion() {

@@ -10,6 +10,7 @@ mod help;
 mod info;
 mod mesh;
 mod outputs;
+mod peers;
 mod print;
 mod render;
 mod slice;
