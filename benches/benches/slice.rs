@@ -67,6 +67,7 @@ fn sl1_from_model(bencher: Bencher) {
             width: r.resolution[0],
             height: r.resolution[1],
             pixel: r.pixel_size,
+            frame: r.frame(),
         };
         let images = render_layers(&source, 0.05, spec, &no_progress).expect("renders");
         let thumb = sl1::thumbnail(

@@ -9,9 +9,8 @@ use anyhow::{Result, bail};
 use clap::{ArgGroup, Args};
 use isoforge_mesh::Mesh;
 use isoforge_slice::{
-    Control, DisplayFrame, DisplayOrientation, GridSpec, Origin, Profile, ProfileError,
-    ProfileErrorKind, SliceError, Source, Technology, check, preview, render_layers, sl1,
-    slice_plate, svx,
+    Control, GridSpec, Origin, Profile, ProfileError, ProfileErrorKind, SliceError, Source,
+    Technology, check, preview, render_layers, sl1, slice_plate, svx,
 };
 
 use isoforge_output::{Options, OutputFile, OutputFolder};
@@ -283,11 +282,7 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
             width: r.resolution[0],
             height: r.resolution[1],
             pixel: r.pixel_size,
-            frame: DisplayFrame {
-                portrait: r.display_orientation == DisplayOrientation::Portrait,
-                mirror_x: r.display_mirror_x,
-                mirror_y: r.display_mirror_y,
-            },
+            frame: r.frame(),
         }
     };
     let images = render_layers(&source, r.layer_height, spec, &progress).map_err(slice_error)?;

@@ -331,6 +331,15 @@ impl FdmSettings {
 }
 
 impl ResinSettings {
+    /// How the display turns and mirrors the bed's picture.
+    pub fn frame(&self) -> crate::DisplayFrame {
+        crate::DisplayFrame {
+            portrait: self.display_orientation == DisplayOrientation::Portrait,
+            mirror_x: self.display_mirror_x,
+            mirror_y: self.display_mirror_y,
+        }
+    }
+
     /// Checks every number against its physical range.
     pub fn validate(&self) -> Result<(), ProfileError> {
         check_ranges(self)
