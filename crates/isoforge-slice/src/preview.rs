@@ -31,12 +31,13 @@ pub fn colour(feature: &str) -> [u8; 3] {
         [20, 120, 60]
     } else if has("support") {
         [60, 200, 90]
+    } else if has("thin") || has("gap") {
+        // Before the walls: THIN-WALL is a wall of its own kind.
+        [240, 240, 240]
     } else if has("outer") || has("external") {
         [255, 140, 20]
     } else if has("inner") || f == "perimeter" || has("wall") {
         [250, 220, 60]
-    } else if has("thin") || has("gap") {
-        [240, 240, 240]
     } else if has("top") {
         [230, 40, 40]
     } else if has("skin") || has("solid") || has("bottom") {
@@ -224,6 +225,7 @@ mod tests {
         let png = draw_layer(&r, 0, &View::fit(&r, 100), 1.75).unwrap();
         assert_eq!(&png[1..4], b"PNG");
         assert_ne!(colour("WALL-OUTER"), colour("FILL"));
+        assert_ne!(colour("THIN-WALL"), colour("WALL-INNER"));
         assert_eq!(colour("External perimeter"), colour("WALL-OUTER"));
         assert_eq!(colour("Bridge infill"), colour("BRIDGE"));
         assert_eq!(default_layers(&r), vec![0]);
