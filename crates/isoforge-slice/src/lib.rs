@@ -53,7 +53,7 @@ pub use profile::{
     DisplayOrientation, FdmSettings, InfillPattern, Origin, PLACEHOLDERS, Profile, ProfileError,
     ProfileErrorKind, ResinSettings, SupportStyle, Technology, TopFillPattern,
 };
-pub use raster::{GridSpec, LayerImages, PixelGrid, render_layers};
+pub use raster::{GridSpec, LayerImages, PixelGrid, render_layers, render_layers_from};
 pub use source::{Layer, Source};
 
 use std::path::PathBuf;

@@ -110,6 +110,18 @@ pub fn render_layers(
     spec: GridSpec,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<LayerImages, SliceError> {
+    render_layers_from(source, layer_height, layer_height, spec, progress)
+}
+
+/// Renders every layer of a model onto a pixel grid: the first `first_layer_height` thick
+/// (PrusaSlicer's `initial_layer_height`), the rest `layer_height`.
+pub fn render_layers_from(
+    source: &Source,
+    first_layer_height: f64,
+    layer_height: f64,
+    spec: GridSpec,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<LayerImages, SliceError> {
     let pixel = match spec {
         GridSpec::Display { pixel, .. } | GridSpec::Fit { pixel } => pixel,
     };
@@ -119,12 +131,13 @@ pub fn render_layers(
         pixel,
         layer_height,
     };
-    if !(pixel > 0.0 && pixel.is_finite() && layer_height > 0.0 && layer_height.is_finite()) {
+    let positive = |v: f64| v > 0.0 && v.is_finite();
+    if !(positive(pixel) && positive(layer_height) && positive(first_layer_height)) {
         return Err(bad_grid(0, 0));
     }
     // Outlines (used for meshes) at a quarter-pixel resolution.
     let model = source.prepare(pixel * 0.5, pixel * 0.1)?;
-    let layers = layer_stack(model.z_range, layer_height, layer_height);
+    let layers = layer_stack(model.z_range, first_layer_height, layer_height);
     let (lo, hi) = xy_extent(source);
     let center = [(lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5];
     let frame = match spec {

@@ -114,6 +114,7 @@ pub(crate) fn prusaslicer_ini(images: &LayerImages, r: &ResinSettings) -> String
         format!("display_mirror_x = {}", u8::from(images.frame.mirror_x)),
         format!("display_mirror_y = {}", u8::from(images.frame.mirror_y)),
         format!("layer_height = {}", r.layer_height),
+        format!("initial_layer_height = {}", r.first_layer_height),
         format!("exposure_time = {}", r.exposure_time),
         format!("initial_exposure_time = {}", r.first_exposure_time),
         format!("faded_layers = {}", r.faded_layers),

@@ -10,7 +10,7 @@ use clap::{ArgGroup, Args};
 use isoforge_mesh::Mesh;
 use isoforge_slice::{
     Control, GridSpec, Origin, Profile, ProfileError, ProfileErrorKind, SliceError, Source,
-    Technology, check, preview, render_layers, sl1, slice_plate, svx,
+    Technology, check, preview, render_layers_from, sl1, slice_plate, svx,
 };
 
 use isoforge_output::{Options, OutputFile, OutputFolder};
@@ -273,7 +273,14 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
     };
 
     let r = p.resin().map_err(profile_error)?;
-    let spec = if matches!(images_out, Images::Svx(_)) {
+    // Voxels are cubes: an SVX's first layer is as thick as the others.
+    let voxels = matches!(images_out, Images::Svx(_));
+    let first = if voxels {
+        r.layer_height
+    } else {
+        r.first_layer_height
+    };
+    let spec = if voxels {
         GridSpec::Fit {
             pixel: r.layer_height,
         }
@@ -285,7 +292,8 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
             frame: r.frame(),
         }
     };
-    let images = render_layers(&source, r.layer_height, spec, &progress).map_err(slice_error)?;
+    let images =
+        render_layers_from(&source, first, r.layer_height, spec, &progress).map_err(slice_error)?;
     bar.finish_and_clear();
     let height = images.layers.last().map_or(0.0, |l| l.top);
     if height > r.max_height {

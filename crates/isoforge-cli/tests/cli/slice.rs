@@ -600,3 +600,27 @@ fn sl1_images_match_prusaslicers_own_pixel_for_pixel() {
         assert!(config.contains(line), "{config}");
     }
 }
+
+#[test]
+fn sl1_first_layer_has_its_own_height_as_prusaslicer_counts_it() {
+    // The letter F is 2 mm tall: PrusaSlicer 2.5 writes 39 layers for a 0.1 mm first layer
+    // and 0.05 mm after it (and 40 when all are 0.05 mm).
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("f.sl1");
+    let json = slice_json(&[
+        s(&fixtures().join("slice/letter_f.rhai")),
+        "--profile",
+        s(&sl1_profile()),
+        "--set",
+        "first_layer_height=0.1",
+        "--sl1",
+        s(&out),
+    ]);
+    assert_eq!(json["layers"].as_u64(), Some(39));
+    let pngs = zip_names(&out)
+        .iter()
+        .filter(|n| n.starts_with("f0") && n.ends_with(".png"))
+        .count();
+    assert_eq!(pngs, 39);
+    assert!(zip_text(&out, "prusaslicer.ini").contains("initial_layer_height = 0.1"));
+}
