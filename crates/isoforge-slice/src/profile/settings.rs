@@ -198,7 +198,8 @@ pub struct FdmSettings {
 pub struct ResinSettings {
     /// Layer height, mm.
     pub layer_height: f64,
-    /// First layer height, mm (exposed for `first_exposure_time`).
+    /// First layer height, mm (PrusaSlicer's `initial_layer_height`), exposed for
+    /// `first_exposure_time`.
     pub first_layer_height: f64,
     /// Pixel size on the display, mm.
     pub pixel_size: f64,
