@@ -1,17 +1,23 @@
 #!/usr/bin/env bash
-# Installs the programs the peer tests judge our output with, when they are missing:
-# PrusaSlicer (its G-code of the same models, tests/cli/peers.rs). Idempotent and quick
-# when everything is there (one `command -v`); needs apt-get (Debian, Ubuntu) otherwise.
+# Installs the programs that judge isoforge's output in tests (see docs/contributing.md):
+# ADMesh, an independent STL checker (crates/isoforge-script/tests/modern_fixtures.rs), and
+# PrusaSlicer, whose G-code of the same models the slicer is compared with
+# (crates/isoforge-cli/tests/cli/peers.rs). Idempotent and quick when they are already
+# there. Debian/Ubuntu (apt-get); elsewhere, install them by hand.
 set -euo pipefail
 missing=()
+command -v admesh >/dev/null 2>&1 || missing+=(admesh)
 command -v prusa-slicer >/dev/null 2>&1 || missing+=(prusa-slicer)
 if [ ${#missing[@]} -eq 0 ]; then
   exit 0
 fi
-sudo=""
-if [ "$(id -u)" -ne 0 ]; then
-  sudo=sudo
+if ! command -v apt-get >/dev/null 2>&1; then
+  echo "install-peers: ${missing[*]} missing and no apt-get: install them by hand" >&2
+  exit 1
 fi
-echo "installing ${missing[*]}" >&2
-$sudo apt-get update -qq
-DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+SUDO=""
+if [ "$(id -u)" != 0 ]; then
+  SUDO="sudo"
+fi
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
