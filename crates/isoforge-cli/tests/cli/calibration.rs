@@ -62,7 +62,13 @@ fn part(feature: &str) -> bool {
 #[test]
 fn layer_counts_are_height_over_layer_height() {
     // (model, height mm): first layer 0.2 mm, then 0.2 mm each.
-    for (name, height) in [("cube", 20.0), ("torus", 10.0), ("pin_tall", 40.0)] {
+    for (name, height) in [
+        ("cube", 20.0),
+        ("cube_holes", 20.0),
+        ("pins", 10.0),
+        ("torus", 10.0),
+        ("pin_tall", 40.0),
+    ] {
         let (r, json) = slice(name, &[]);
         let want = (height / 0.2_f64).round() as usize;
         assert_eq!(r.layers.len(), want, "{name}");
