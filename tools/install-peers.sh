@@ -1,14 +1,18 @@
 #!/usr/bin/env bash
 # Installs the programs that judge isoforge's output in tests (see docs/contributing.md):
-# ADMesh, an independent STL checker (crates/isoforge-script/tests/modern_fixtures.rs).
-# Idempotent and quick when they are already there. Debian/Ubuntu (apt-get); elsewhere,
-# install ADMesh by hand.
+# ADMesh, an independent STL checker (crates/isoforge-script/tests/modern_fixtures.rs), and
+# PrusaSlicer, whose G-code of the same models the slicer is compared with
+# (crates/isoforge-cli/tests/cli/peers.rs). Idempotent and quick when they are already
+# there. Debian/Ubuntu (apt-get); elsewhere, install them by hand.
 set -euo pipefail
-if command -v admesh >/dev/null 2>&1; then
+missing=()
+command -v admesh >/dev/null 2>&1 || missing+=(admesh)
+command -v prusa-slicer >/dev/null 2>&1 || missing+=(prusa-slicer)
+if [ ${#missing[@]} -eq 0 ]; then
   exit 0
 fi
 if ! command -v apt-get >/dev/null 2>&1; then
-  echo "install-peers: no admesh and no apt-get: install ADMesh by hand" >&2
+  echo "install-peers: ${missing[*]} missing and no apt-get: install them by hand" >&2
   exit 1
 fi
 SUDO=""
@@ -16,5 +20,4 @@ if [ "$(id -u)" != 0 ]; then
   SUDO="sudo"
 fi
 $SUDO apt-get update -qq
-$SUDO apt-get install -y -qq admesh
-admesh --version
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

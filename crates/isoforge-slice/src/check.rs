@@ -2,10 +2,14 @@
 //! would do with it, so tests judge the output and not the slicer's intentions.
 //!
 //! It follows moves, G92, G90/G91, M82/M83, G20/G21 and G28 (through `isoforge-gcode`),
-//! collects every extruding move with its layer (from `;LAYER:n`) and feature (`;TYPE:`),
+//! collects every move, every extruding move with its layer (from `;LAYER:n`, or PrusaSlicer's
+//! `;LAYER_CHANGE`) and feature (`;TYPE:`), `G4` waits,
 //! the temperatures set before the first extrusion, and the travel envelope.
 
 use isoforge_gcode::{Effect, Heater, Machine};
+
+mod bridges;
+pub mod features;
 
 /// An extruding move.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,11 +28,32 @@ pub struct Extrude {
     pub line: usize,
 }
 
+/// Any move (G0/G1), extruding or not.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Motion {
+    /// Start, mm.
+    pub from: [f64; 3],
+    /// End, mm.
+    pub to: [f64; 3],
+    /// Filament pushed (negative: pulled back), mm.
+    pub e: f64,
+    /// Feed rate in force, mm/s (0 before any F).
+    pub feed: f64,
+    /// The layer it belongs to.
+    pub layer: Option<usize>,
+    /// Line number (1-based).
+    pub line: usize,
+}
+
 /// What a G-code file does.
 #[derive(Clone, Debug, Default)]
 pub struct GcodeReport {
     /// Extruding moves (retractions and primes without motion are not here).
     pub extrusions: Vec<Extrude>,
+    /// Every move, in file order (the judges in [`features`] read these).
+    pub moves: Vec<Motion>,
+    /// Waits (`G4`), s, with their layer.
+    pub dwells: Vec<(Option<usize>, f64)>,
     /// `;LAYER:n` markers with the `;Z:` that followed each, in file order.
     pub layers: Vec<(usize, Option<f64>)>,
     /// The Z of the first extrusion of each layer index.
@@ -89,6 +114,11 @@ pub fn parse(text: &str) -> Result<GcodeReport, CheckError> {
                     })?;
                     layer = Some(k);
                     r.layers.push((k, None));
+                } else if m == "LAYER_CHANGE" {
+                    // PrusaSlicer's and Slic3r's marker: layers counted from 0.
+                    let k = r.layers.len();
+                    layer = Some(k);
+                    r.layers.push((k, None));
                 } else if let Some(v) = m.strip_prefix("Z:") {
                     if let Some(last) = r.layers.last_mut() {
                         last.1 = v.trim().parse().ok();
@@ -105,6 +135,16 @@ pub fn parse(text: &str) -> Result<GcodeReport, CheckError> {
                 let moved = to != pos;
                 if moved {
                     homed_or_moved = true;
+                }
+                if moved || de != 0.0 {
+                    r.moves.push(Motion {
+                        from: pos,
+                        to,
+                        e: de,
+                        feed: mv.feedrate.unwrap_or(0.0) / 60.0,
+                        layer,
+                        line: n,
+                    });
                 }
                 if de > 0.0 && (to[0] != pos[0] || to[1] != pos[1]) {
                     r.filament_mm += de;
@@ -135,6 +175,14 @@ pub fn parse(text: &str) -> Result<GcodeReport, CheckError> {
                 }
             }
             Effect::Home(_) => homed_or_moved = true,
+            Effect::Other if cmd.code.is('G', 4) => {
+                let secs = match (cmd.get('P'), cmd.get('S')) {
+                    (Some(ms), _) => ms / 1000.0,
+                    (None, Some(sec)) => sec,
+                    _ => 0.0,
+                };
+                r.dwells.push((layer, secs));
+            }
             Effect::Heat {
                 heater: Heater::Hotend(_),
                 target,
@@ -207,6 +255,14 @@ impl GcodeReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn prusaslicer_layer_changes_count_layers() {
+        let g = "G90\nM82\nG92 E0\n;LAYER_CHANGE\n;Z:0.2\nG1 X1 Y0 E1\n;LAYER_CHANGE\n;Z:0.4\nG1 X2 E2\n";
+        let r = parse(g).unwrap();
+        assert_eq!(r.layers, [(0, Some(0.2)), (1, Some(0.4))]);
+        assert_eq!(r.extrusions[1].layer, Some(1));
+    }
 
     #[test]
     fn follows_absolute_and_relative_extrusion() {

@@ -92,9 +92,17 @@ pub fn segments_cross(a: Point, b: Point, c: Point, d: Point) -> bool {
 /// contours slow polygon offsetting down superlinearly (docs/constants.md), so every
 /// outline goes through this before perimeters are built.
 pub fn simplify_closed(c: &[Point], tol: f64) -> Contour {
+    simplify_closed_indices(c, tol)
+        .into_iter()
+        .map(|i| c[i])
+        .collect()
+}
+
+/// [`simplify_closed`], as the indices of the points kept, in order.
+pub fn simplify_closed_indices(c: &[Point], tol: f64) -> Vec<usize> {
     let n = c.len();
     if n <= 4 || tol <= 0.0 {
-        return c.to_vec();
+        return (0..n).collect();
     }
     // Split the loop at the point farthest from the first one: both halves are open
     // polylines with well-separated ends, which Douglas-Peucker handles well.
@@ -125,8 +133,49 @@ pub fn simplify_closed(c: &[Point], tol: f64) -> Contour {
             stack.push((best.1, j));
         }
     }
-    let out: Contour = (0..n).filter(|&i| keep[i]).map(|i| c[i]).collect();
-    if out.len() < 3 { c.to_vec() } else { out }
+    let out: Vec<usize> = (0..n).filter(|&i| keep[i]).collect();
+    if out.len() < 3 { (0..n).collect() } else { out }
+}
+
+/// Douglas-Peucker simplification of an open polyline: the indices of the points kept
+/// (always the first and the last), every dropped point within `tol` of the result.
+pub fn simplify_open(p: &[Point], tol: f64) -> Vec<usize> {
+    let n = p.len();
+    if n <= 2 {
+        return (0..n).collect();
+    }
+    let mut keep = vec![false; n];
+    keep[0] = true;
+    keep[n - 1] = true;
+    let mut stack = vec![(0usize, n - 1)];
+    while let Some((i, j)) = stack.pop() {
+        if j <= i + 1 {
+            continue;
+        }
+        let mut best = (0.0, i);
+        for k in i + 1..j {
+            let d = segment_distance(p[k], p[i], p[j]);
+            if d > best.0 {
+                best = (d, k);
+            }
+        }
+        if best.0 > tol {
+            keep[best.1] = true;
+            stack.push((i, best.1));
+            stack.push((best.1, j));
+        }
+    }
+    (0..n).filter(|&i| keep[i]).collect()
+}
+
+/// The length of a polyline.
+pub fn polyline_length(p: &[Point]) -> f64 {
+    p.windows(2).map(|w| dist(w[0], w[1])).sum()
+}
+
+/// True when `p` lies inside the region (holes excluded).
+pub fn inside_region(p: Point, r: &Region) -> bool {
+    r.iter().any(|shape| inside_contours(p, shape))
 }
 
 /// Even-odd point-in-polygon over many contours.

@@ -18,32 +18,42 @@
 //! writers in [`sl1`] and [`svx`], and the G-code checker in [`check`]. Outlines, perimeters,
 //! skins, infill and path ordering are internal stages.
 
+mod adhesion;
+mod bridges;
 pub mod check;
+mod clip;
+pub mod display;
 mod fdm;
 mod gcode;
 mod geom;
 mod infill;
+mod medial;
 mod outline;
+mod overhangs;
 mod paths;
-mod perimeters;
+pub mod preview;
 mod profile;
 mod raster;
-mod skins;
 pub mod sl1;
 mod source;
+mod supports;
+mod surfaces;
 pub mod svx;
+mod walls;
 
 #[cfg(test)]
 mod region_agreement_tests;
 
-pub use fdm::{GcodeJob, Progress, slice_gcode};
+pub use display::DisplayFrame;
+pub use fdm::{Control, GcodeJob, Progress, SliceWarning, slice_gcode, slice_plate};
 pub use gcode::GcodeStats;
+pub use paths::Role;
 pub use profile::keys;
 pub use profile::{
-    FdmSettings, InfillPattern, Origin, PLACEHOLDERS, Profile, ProfileError, ProfileErrorKind,
-    ResinSettings, Technology,
+    DisplayOrientation, FdmSettings, InfillPattern, Origin, PLACEHOLDERS, Profile, ProfileError,
+    ProfileErrorKind, ResinSettings, SupportStyle, Technology, TopFillPattern,
 };
-pub use raster::{GridSpec, LayerImages, PixelGrid, render_layers};
+pub use raster::{GridSpec, LayerImages, PixelGrid, render_layers, render_layers_from};
 pub use source::{Layer, Source};
 
 use std::path::PathBuf;
@@ -169,6 +179,24 @@ pub enum SliceError {
         /// The first layer that reaches its edge.
         layer: usize,
     },
+    /// The layer height would make more layers than one job may have.
+    #[error(
+        "the model is {height:.1} mm tall: {layers} layers of {layer_height} mm, more than \
+         the {max} one job may have; use a larger layer_height"
+    )]
+    TooManyLayers {
+        /// The model's height, mm.
+        height: f64,
+        /// The layer height, mm.
+        layer_height: f64,
+        /// The layers it would take.
+        layers: usize,
+        /// The most allowed.
+        max: usize,
+    },
+    /// The work was cancelled through the cancel flag.
+    #[error("cancelled")]
+    Cancelled,
     /// Layer images of this size cannot be made.
     #[error(
         "layer images of {width} x {height} pixels of {pixel} mm, {layer_height} mm apart, \

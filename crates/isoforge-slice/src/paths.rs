@@ -1,64 +1,164 @@
-//! Tool paths of one layer in print order: skirt, then island by island its perimeters
-//! (innermost first, the outer wall last so it is laid against support), then its skins
-//! and infill. Each island, and each infill line within it, starts at the point nearest to
-//! where the nozzle is. Loops start at their seam: the point nearest the back of the bed,
-//! so seams line up from layer to layer.
+//! What the nozzle lays down: extrusions (polylines with a width per segment) and their
+//! roles, which decide speed, fan and the `;TYPE:` a G-code reader sees.
 
-use crate::geom::{Contour, Point, Region, dist};
+use crate::geom::{Point, dist};
 
-/// What a path is, for speeds and the `;TYPE:` comments.
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+/// What an extrusion is for.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
 pub enum Role {
     /// Loops around the first layer, to prime the nozzle.
     Skirt,
-    /// The outermost perimeter.
+    /// Loops around the first layer's outline, touching it, for adhesion.
+    Brim,
+    /// The layers of a raft under the part.
+    Raft,
+    /// Support columns.
+    Support,
+    /// The dense top of a support, under the part.
+    SupportInterface,
+    /// The outermost loop.
     OuterWall,
-    /// Inner perimeters.
+    /// Loops inside the outer one.
     InnerWall,
-    /// Solid top and bottom skin.
+    /// Outer wall over air, or on a surface leaning past the support angle.
+    Overhang,
+    /// A wall too thin for a loop, printed along its centre at its width.
+    ThinWall,
+    /// A gap between loops, filled along its centre at its width.
+    GapFill,
+    /// Lines across air, anchored on both sides.
+    Bridge,
+    /// The first solid layer over sparse infill, laid like a bridge.
+    InternalBridge,
+    /// Solid infill under a top or over a bottom.
     Skin,
+    /// The visible top surface.
+    TopSkin,
     /// Sparse infill.
     Fill,
+    /// A nearly dry pass over the top surface that smooths it.
+    Ironing,
 }
 
 impl Role {
-    /// The name in `;TYPE:` comments (Cura's names, which G-code viewers know).
+    /// The `;TYPE:` name.
     pub fn name(self) -> &'static str {
         match self {
             Role::Skirt => "SKIRT",
+            Role::Brim => "BRIM",
+            Role::Raft => "RAFT",
+            Role::Support => "SUPPORT",
+            Role::SupportInterface => "SUPPORT-INTERFACE",
             Role::OuterWall => "WALL-OUTER",
             Role::InnerWall => "WALL-INNER",
+            Role::Overhang => "OVERHANG",
+            Role::ThinWall => "THIN-WALL",
+            Role::GapFill => "GAP-FILL",
+            Role::Bridge => "BRIDGE",
+            Role::InternalBridge => "INTERNAL-BRIDGE",
             Role::Skin => "SKIN",
+            Role::TopSkin => "TOP-SKIN",
             Role::Fill => "FILL",
+            Role::Ironing => "IRONING",
         }
+    }
+
+    /// Every role, for tables and legends.
+    pub const ALL: [Role; 16] = [
+        Role::Skirt,
+        Role::Brim,
+        Role::Raft,
+        Role::Support,
+        Role::SupportInterface,
+        Role::OuterWall,
+        Role::InnerWall,
+        Role::Overhang,
+        Role::ThinWall,
+        Role::GapFill,
+        Role::Bridge,
+        Role::InternalBridge,
+        Role::Skin,
+        Role::TopSkin,
+        Role::Fill,
+        Role::Ironing,
+    ];
+
+    /// Printed over air: bridge speed and the bridge fan.
+    pub fn over_air(self) -> bool {
+        matches!(self, Role::Bridge | Role::InternalBridge | Role::Overhang)
     }
 }
 
-/// One extrusion: a polyline (closed loops repeat their first point at the end).
+/// The shape of a line's cross-section, which sets the filament it takes per mm.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Flow {
+    /// A flat bead as thick as the layer: width × layer height.
+    Layer,
+    /// A round strand as wide as its width (bridges hang in air): π/4 × width².
+    Round,
+    /// A flat bead at a fraction of the full flow (ironing).
+    Scaled(f64),
+}
+
+/// One extrusion: a polyline (closed loops repeat their first point at the end) with the
+/// width of each segment.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Extrusion {
     /// Its role.
     pub role: Role,
     /// The points in print order.
     pub points: Vec<Point>,
+    /// The width of each segment, mm (one fewer than the points).
+    pub widths: Vec<f64>,
+    /// Its cross-section.
+    pub flow: Flow,
 }
 
-/// One island of a layer, ready to order.
-#[derive(Clone, Debug, Default)]
-pub struct Island {
-    /// Perimeter loops, outermost first (each inset's contours).
-    pub loops: Vec<Vec<Contour>>,
-    /// Solid skin lines.
-    pub skin: Vec<Vec<Point>>,
-    /// Sparse infill lines.
-    pub fill: Vec<Vec<Point>>,
+impl Extrusion {
+    /// A line of one width.
+    pub fn new(role: Role, points: Vec<Point>, width: f64, flow: Flow) -> Extrusion {
+        let widths = vec![width; points.len().saturating_sub(1)];
+        Extrusion {
+            role,
+            points,
+            widths,
+            flow,
+        }
+    }
+
+    /// True when it ends where it starts.
+    pub fn closed(&self) -> bool {
+        self.points.len() > 2 && self.points.first() == self.points.last()
+    }
+
+    /// The same line printed the other way.
+    pub fn reverse(&mut self) {
+        self.points.reverse();
+        self.widths.reverse();
+    }
+
+    /// Its length, mm.
+    pub fn length(&self) -> f64 {
+        self.points.windows(2).map(|w| dist(w[0], w[1])).sum()
+    }
+
+    /// Its first point.
+    pub fn start(&self) -> Option<Point> {
+        self.points.first().copied()
+    }
+
+    /// Its last point.
+    pub fn end(&self) -> Option<Point> {
+        self.points.last().copied()
+    }
 }
 
 /// The seam target: far behind the bed's back edge, so the rear-most point of each loop wins.
-const SEAM_TARGET: Point = [0.0, 1.0e6];
+pub const SEAM_TARGET: Point = [0.0, 1.0e6];
 
-/// A closed loop as a path starting at its seam (the vertex nearest `SEAM_TARGET`).
-pub fn loop_from_seam(c: &Contour) -> Vec<Point> {
+/// A closed contour as a path starting at its seam (the vertex nearest `SEAM_TARGET`,
+/// ties to the left), repeating its first point at the end.
+pub fn loop_from_seam(c: &[Point]) -> Vec<Point> {
     let Some(start) = (0..c.len()).min_by(|&a, &b| {
         dist(c[a], SEAM_TARGET)
             .total_cmp(&dist(c[b], SEAM_TARGET))
@@ -71,150 +171,36 @@ pub fn loop_from_seam(c: &Contour) -> Vec<Point> {
     p
 }
 
-/// Orders open lines greedily: each next line is the one with an end nearest the
-/// current position, reversed if its far end is nearer.
-pub fn order_lines(lines: Vec<Vec<Point>>, role: Role, pos: &mut Point, out: &mut Vec<Extrusion>) {
-    let mut left: Vec<Option<Vec<Point>>> = lines.into_iter().map(Some).collect();
-    let mut remaining = left.len();
-    while remaining > 0 {
+/// Orders extrusions greedily from `pos`: each next one is the one that starts (or, when
+/// it may be reversed, ends) nearest; closed ones are entered at their start. `pos` ends
+/// where the last one ends.
+pub fn order_nearest(mut items: Vec<Extrusion>, pos: &mut Point, out: &mut Vec<Extrusion>) {
+    while !items.is_empty() {
         let mut best = (f64::INFINITY, 0, false);
-        for (k, l) in left.iter().enumerate() {
-            if let Some(l) = l
-                && let (Some(&a), Some(&b)) = (l.first(), l.last())
-            {
-                let (da, db) = (dist(*pos, a), dist(*pos, b));
-                if da < best.0 {
-                    best = (da, k, false);
-                }
+        for (k, e) in items.iter().enumerate() {
+            let (Some(a), Some(b)) = (e.start(), e.end()) else {
+                continue;
+            };
+            let da = dist(*pos, a);
+            if da < best.0 {
+                best = (da, k, false);
+            }
+            if !e.closed() {
+                let db = dist(*pos, b);
                 if db < best.0 {
                     best = (db, k, true);
                 }
             }
         }
-        let Some(mut l) = left.get_mut(best.1).and_then(Option::take) else {
-            break;
-        };
-        remaining -= 1;
+        let mut e = items.swap_remove(best.1);
         if best.2 {
-            l.reverse();
+            e.reverse();
         }
-        if let Some(&last) = l.last() {
-            *pos = last;
+        if let Some(end) = e.end() {
+            *pos = end;
         }
-        out.push(Extrusion { role, points: l });
+        out.push(e);
     }
-}
-
-/// The layer's extrusions in print order, starting from `pos` (updated to the end).
-pub fn order_layer(skirt: &[Contour], mut islands: Vec<Island>, pos: &mut Point) -> Vec<Extrusion> {
-    let mut out = Vec::new();
-    for c in skirt {
-        let p = loop_from_seam(c);
-        if let Some(&last) = p.last() {
-            *pos = last;
-        }
-        out.push(Extrusion {
-            role: Role::Skirt,
-            points: p,
-        });
-    }
-    while !islands.is_empty() {
-        // The island whose first loop's seam (or first line) is nearest.
-        let entry = |isl: &Island| -> Point {
-            isl.loops
-                .last()
-                .and_then(|l| l.first())
-                .and_then(|c| loop_from_seam(c).first().copied())
-                .or_else(|| isl.skin.first().and_then(|l| l.first().copied()))
-                .or_else(|| isl.fill.first().and_then(|l| l.first().copied()))
-                .unwrap_or(*pos)
-        };
-        let k = (0..islands.len())
-            .min_by(|&a, &b| {
-                dist(*pos, entry(&islands[a])).total_cmp(&dist(*pos, entry(&islands[b])))
-            })
-            .unwrap_or(0);
-        let isl = islands.swap_remove(k);
-        for (depth, inset) in isl.loops.iter().enumerate().rev() {
-            let role = if depth == 0 {
-                Role::OuterWall
-            } else {
-                Role::InnerWall
-            };
-            // Within one inset, nearest contour first.
-            let mut cs: Vec<&Contour> = inset.iter().collect();
-            while !cs.is_empty() {
-                let j = (0..cs.len())
-                    .min_by(|&a, &b| {
-                        let da = loop_from_seam(cs[a])
-                            .first()
-                            .map_or(f64::INFINITY, |p| dist(*pos, *p));
-                        let db = loop_from_seam(cs[b])
-                            .first()
-                            .map_or(f64::INFINITY, |p| dist(*pos, *p));
-                        da.total_cmp(&db)
-                    })
-                    .unwrap_or(0);
-                let p = loop_from_seam(cs.swap_remove(j));
-                if let Some(&last) = p.last() {
-                    *pos = last;
-                }
-                out.push(Extrusion { role, points: p });
-            }
-        }
-        order_lines(isl.skin, Role::Skin, pos, &mut out);
-        order_lines(isl.fill, Role::Fill, pos, &mut out);
-    }
-    out
-}
-
-/// Splits a layer's regions into islands: each shape of `outline` with the perimeters,
-/// skin and fill lines that lie in it. Lines are assigned by their first point.
-pub fn islands(
-    outline: &Region,
-    loops: Vec<Vec<Contour>>,
-    skin: Vec<Vec<Point>>,
-    fill: Vec<Vec<Point>>,
-) -> Vec<Island> {
-    let mut out: Vec<Island> = outline.iter().map(|_| Island::default()).collect();
-    if out.is_empty() {
-        return out;
-    }
-    let which = |p: Point| -> usize {
-        outline
-            .iter()
-            .position(|shape| crate::geom::inside_contours(p, shape))
-            .unwrap_or_else(|| {
-                // On a boundary: the nearest shape.
-                (0..outline.len())
-                    .min_by(|&a, &b| {
-                        crate::geom::distance_to_contours(p, &outline[a])
-                            .total_cmp(&crate::geom::distance_to_contours(p, &outline[b]))
-                    })
-                    .unwrap_or(0)
-            })
-    };
-    for (depth, inset) in loops.into_iter().enumerate() {
-        for c in inset {
-            let Some(&p) = c.first() else { continue };
-            let isl = &mut out[which(p)];
-            if isl.loops.len() <= depth {
-                isl.loops.resize(depth + 1, Vec::new());
-            }
-            isl.loops[depth].push(c);
-        }
-    }
-    for l in skin {
-        if let Some(&p) = l.first() {
-            out[which(p)].skin.push(l);
-        }
-    }
-    for l in fill {
-        if let Some(&p) = l.first() {
-            out[which(p)].fill.push(l);
-        }
-    }
-    out
 }
 
 #[cfg(test)]
@@ -238,26 +224,15 @@ mod tests {
 
     #[test]
     fn lines_are_ordered_nearest_first_and_flipped() {
-        let lines = vec![vec![[10.0, 0.0], [20.0, 0.0]], vec![[0.0, 1.0], [9.0, 1.0]]];
+        let lines = vec![
+            Extrusion::new(Role::Fill, vec![[10.0, 0.0], [20.0, 0.0]], 0.4, Flow::Layer),
+            Extrusion::new(Role::Fill, vec![[0.0, 1.0], [9.0, 1.0]], 0.4, Flow::Layer),
+        ];
         let mut pos = [0.0, 0.0];
         let mut out = Vec::new();
-        order_lines(lines, Role::Fill, &mut pos, &mut out);
+        order_nearest(lines, &mut pos, &mut out);
         assert_eq!(out[0].points[0], [0.0, 1.0]);
         assert_eq!(out[1].points[0], [10.0, 0.0]);
         assert_eq!(pos, [20.0, 0.0]);
-    }
-
-    #[test]
-    fn outer_wall_is_printed_last_among_loops() {
-        let sq = |a: f64, b: f64| vec![[a, a], [b, a], [b, b], [a, b]];
-        let isl = Island {
-            loops: vec![vec![sq(0.0, 10.0)], vec![sq(1.0, 9.0)]],
-            skin: vec![],
-            fill: vec![vec![[2.0, 2.0], [8.0, 8.0]]],
-        };
-        let mut pos = [0.0, 0.0];
-        let out = order_layer(&[], vec![isl], &mut pos);
-        let roles: Vec<Role> = out.iter().map(|e| e.role).collect();
-        assert_eq!(roles, [Role::InnerWall, Role::OuterWall, Role::Fill]);
     }
 }

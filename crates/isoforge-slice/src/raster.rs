@@ -16,6 +16,7 @@ use isoforge_field::{ClippedField, GradEval, Interval, IntervalEval};
 use rayon::prelude::*;
 
 use crate::SliceError;
+use crate::display::DisplayFrame;
 use crate::outline::FieldSlicer;
 use crate::outline::mesh::mesh_bounds;
 use crate::source::{Layer, Sliceable, Source, layer_stack};
@@ -57,12 +58,14 @@ pub enum GridSpec {
     /// A printer's display of fixed size, centred on the model; a model that does not fit
     /// is an error.
     Display {
-        /// Pixels across.
+        /// The image's pixels across.
         width: u32,
-        /// Pixels down.
+        /// The image's pixels down.
         height: u32,
         /// Pixel size, mm.
         pixel: f64,
+        /// How the display turns and mirrors the bed's picture.
+        frame: DisplayFrame,
     },
     /// A grid just large enough for the model (voxel output), one empty pixel around it.
     Fit {
@@ -75,8 +78,10 @@ pub enum GridSpec {
 pub struct LayerImages {
     /// The layers (bed coordinates, `model_z` the model height).
     pub layers: Vec<Layer>,
-    /// The grid every image uses.
+    /// The bed's grid every layer is drawn on (columns along x, row 0 at the largest y).
     pub grid: PixelGrid,
+    /// How the images turn and mirror the bed's grid.
+    pub frame: DisplayFrame,
     /// One PNG per layer.
     pub pngs: Vec<Vec<u8>>,
     /// White area of each layer, mm² (sum of pixel coverage times pixel area).
@@ -88,12 +93,31 @@ pub struct LayerImages {
     pub silhouette_size: (u32, u32),
 }
 
+impl LayerImages {
+    /// The images' size (width, height), pixels.
+    pub fn image_size(&self) -> [u32; 2] {
+        self.frame.image_size([self.grid.width, self.grid.height])
+    }
+}
+
 /// The silhouette is kept at this fraction of the layer resolution.
 pub const SILHOUETTE: u32 = 4;
 
 /// Renders every layer of a model at `layer_height` onto a pixel grid.
 pub fn render_layers(
     source: &Source,
+    layer_height: f64,
+    spec: GridSpec,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<LayerImages, SliceError> {
+    render_layers_from(source, layer_height, layer_height, spec, progress)
+}
+
+/// Renders every layer of a model onto a pixel grid: the first `first_layer_height` thick
+/// (PrusaSlicer's `initial_layer_height`), the rest `layer_height`.
+pub fn render_layers_from(
+    source: &Source,
+    first_layer_height: f64,
     layer_height: f64,
     spec: GridSpec,
     progress: &(dyn Fn(usize, usize) + Sync),
@@ -107,16 +131,24 @@ pub fn render_layers(
         pixel,
         layer_height,
     };
-    if !(pixel > 0.0 && pixel.is_finite() && layer_height > 0.0 && layer_height.is_finite()) {
+    let positive = |v: f64| v > 0.0 && v.is_finite();
+    if !(positive(pixel) && positive(layer_height) && positive(first_layer_height)) {
         return Err(bad_grid(0, 0));
     }
     // Outlines (used for meshes) at a quarter-pixel resolution.
     let model = source.prepare(pixel * 0.5, pixel * 0.1)?;
-    let layers = layer_stack(model.z_range, layer_height, layer_height);
+    let layers = layer_stack(model.z_range, first_layer_height, layer_height);
     let (lo, hi) = xy_extent(source);
     let center = [(lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5];
+    let frame = match spec {
+        GridSpec::Display { frame, .. } => frame,
+        GridSpec::Fit { .. } => DisplayFrame::default(),
+    };
     let (width, height) = match spec {
-        GridSpec::Display { width, height, .. } => (width, height),
+        GridSpec::Display { width, height, .. } => {
+            let [w, h] = frame.bed_size([width, height]);
+            (w, h)
+        }
         GridSpec::Fit { .. } => (
             ((hi[0] - lo[0]) / pixel).ceil() as u32 + 2,
             ((hi[1] - lo[1]) / pixel).ceil() as u32 + 2,
@@ -146,7 +178,8 @@ pub fn render_layers(
             if let Ok(mut sil) = silhouette.lock() {
                 accumulate(&mut sil, sil_size.0, &img, width, height);
             }
-            let png = encode_png(&img, width, height)?;
+            let [iw, ih] = frame.image_size([width, height]);
+            let png = encode_png(&frame.apply(&img, width, height), iw, ih)?;
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, layers.len());
             Ok((png, area, touches))
         })
@@ -167,6 +200,7 @@ pub fn render_layers(
     Ok(LayerImages {
         layers,
         grid,
+        frame,
         pngs,
         areas,
         silhouette: silhouette.into_inner().unwrap_or_default(),

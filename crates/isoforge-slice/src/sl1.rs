@@ -96,7 +96,7 @@ pub(crate) fn config_ini(images: &LayerImages, r: &ResinSettings, job: &str) -> 
 /// `prusaslicer.ini`: the settings in PrusaSlicer's names.
 pub(crate) fn prusaslicer_ini(images: &LayerImages, r: &ResinSettings) -> String {
     let g = &images.grid;
-    let orientation = if g.width <= g.height {
+    let orientation = if images.frame.portrait {
         "portrait"
     } else {
         "landscape"
@@ -111,7 +111,10 @@ pub(crate) fn prusaslicer_ini(images: &LayerImages, r: &ResinSettings) -> String
         format!("display_width = {}", g.width as f64 * g.pixel),
         format!("display_height = {}", g.height as f64 * g.pixel),
         format!("display_orientation = {orientation}"),
+        format!("display_mirror_x = {}", u8::from(images.frame.mirror_x)),
+        format!("display_mirror_y = {}", u8::from(images.frame.mirror_y)),
         format!("layer_height = {}", r.layer_height),
+        format!("initial_layer_height = {}", r.first_layer_height),
         format!("exposure_time = {}", r.exposure_time),
         format!("initial_exposure_time = {}", r.first_exposure_time),
         format!("faded_layers = {}", r.faded_layers),

@@ -5,7 +5,7 @@ use isoforge_field::{Bounds, Shape};
 use isoforge_mesh::Mesh;
 
 use crate::SliceError;
-use crate::geom::{Contour, bbox};
+use crate::geom::Contour;
 use crate::outline::mesh::mesh_bounds;
 use crate::outline::{FieldSlicer, MeshSlicer};
 
@@ -76,6 +76,19 @@ impl Sliceable<'_> {
         }
     }
 
+    /// The outline at model height `z` with, at each point, how far the surface faces
+    /// down there (−n_z of its unit normal: from the field's gradient, or the mesh facet).
+    pub fn outline_with_tilts(&self, z: f64, slab: (f64, f64)) -> (Vec<Contour>, Vec<Vec<f32>>) {
+        match &self.inner {
+            Inner::Field(f) => {
+                let c = f.outline(z, slab);
+                let t = f.tilts(&c, z);
+                (c, t)
+            }
+            Inner::Mesh(m) => m.outline_with_tilts(z),
+        }
+    }
+
     /// The field slicer, when the model is a field (raster output evaluates it per pixel).
     pub fn field(&self) -> Option<&FieldSlicer> {
         match &self.inner {
@@ -97,15 +110,38 @@ pub struct Layer {
     pub model_z: f64,
 }
 
+/// A model that overshoots a whole number of layers by less than this fraction of a layer
+/// gets no layer of its own for the sliver: a mesh whose top is at 10.001 mm is 50 layers
+/// of 0.2 mm, not 51 (mesh vertices stored as f32 and mesher placement put tops a few µm
+/// off; a sliver layer would print a nearly empty layer in the air).
+pub const OVERSHOOT_TOLERANCE: f64 = 0.1;
+
+/// The most layers one job may have: 250 mm at 5 µm. More is a mistake in the layer
+/// height, refused before any work with the estimate.
+pub const MAX_LAYERS: usize = 50_000;
+
+/// How many layers cover `total` mm: the first `first` mm thick, then `height` mm each.
+pub fn layer_count(total: f64, first: f64, height: f64) -> usize {
+    if total.is_nan() || total <= 0.0 {
+        return 0;
+    }
+    let rest = (total - first) / height;
+    if rest <= OVERSHOOT_TOLERANCE {
+        return 1;
+    }
+    1 + (rest - OVERSHOOT_TOLERANCE).ceil() as usize
+}
+
 /// The layers for a model of height range `z_range`: the first `first` mm thick, then
-/// `height` mm each, until the model's top is covered.
+/// `height` mm each, until the model's top is covered (within [`OVERSHOOT_TOLERANCE`]).
+/// Callers check the count against [`MAX_LAYERS`] first.
 pub fn layer_stack(z_range: (f64, f64), first: f64, height: f64) -> Vec<Layer> {
     let total = z_range.1 - z_range.0;
-    let mut layers = Vec::new();
+    let n = layer_count(total, first, height).min(MAX_LAYERS);
+    let mut layers = Vec::with_capacity(n);
     let mut bottom = 0.0;
     let mut h = first;
-    // A tiny slack so a model that is a whole number of layers tall gets no empty extra one.
-    while bottom < total - 1e-6 && layers.len() < 1_000_000 {
+    for _ in 0..n {
         let top = bottom + h;
         layers.push(Layer {
             top,
@@ -118,9 +154,18 @@ pub fn layer_stack(z_range: (f64, f64), first: f64, height: f64) -> Vec<Layer> {
     layers
 }
 
-/// The bounding box of a set of layer outlines, `(min, max)`.
-pub fn outlines_bbox(layers: &[Vec<Contour>]) -> Option<([f64; 2], [f64; 2])> {
-    bbox(layers.iter().flatten().flatten())
+/// Refuses a stack of more than [`MAX_LAYERS`] layers, naming the estimate.
+pub fn check_layer_count(total: f64, first: f64, height: f64) -> Result<(), SliceError> {
+    let layers = layer_count(total, first, height);
+    if layers > MAX_LAYERS {
+        return Err(SliceError::TooManyLayers {
+            height: total,
+            layer_height: height,
+            layers,
+            max: MAX_LAYERS,
+        });
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -136,5 +181,24 @@ mod tests {
         assert!((l[0].model_z - (-10.0 + 0.15)).abs() < 1e-12);
         let l = layer_stack((0.0, 1.0), 0.2, 0.2);
         assert_eq!(l.len(), 5);
+    }
+
+    #[test]
+    fn a_top_a_few_microns_over_a_whole_layer_gets_no_extra_layer() {
+        assert_eq!(layer_count(10.001, 0.2, 0.2), 50);
+        assert_eq!(layer_count(10.002, 0.2, 0.2), 50);
+        assert_eq!(layer_count(22.3501, 0.05, 0.05), 447);
+        // A real sliver (a quarter of a layer) still gets its layer.
+        assert_eq!(layer_count(10.05, 0.2, 0.2), 51);
+        assert_eq!(layer_count(9.999, 0.2, 0.2), 50);
+    }
+
+    #[test]
+    fn too_many_layers_are_refused_with_the_estimate() {
+        match check_layer_count(250.0, 1e-9, 1e-9) {
+            Err(SliceError::TooManyLayers { layers, .. }) => assert!(layers > MAX_LAYERS),
+            other => panic!("{other:?}"),
+        }
+        assert!(check_layer_count(250.0, 0.2, 0.2).is_ok());
     }
 }

@@ -144,16 +144,28 @@ fn skirt_fan_retraction_and_progress_are_there() {
     assert!(g.contains(&format!("G1 E-{:.5}", s.retract_length)) || g.contains("E-"));
     assert_eq!(g.matches("M73 P").count(), job.stats.layers + 1);
     assert!(g.contains("; filament used [g] =") && g.contains("; estimated printing time"));
-    // The outer wall comes after the inner one on each layer.
-    let l5: Vec<&str> = r
-        .extrusions
-        .iter()
-        .filter(|x| x.layer == Some(5))
-        .map(|x| x.feature.as_str())
-        .collect();
-    let last_inner = l5.iter().rposition(|f| *f == "WALL-INNER").unwrap();
-    let first_outer = l5.iter().position(|f| *f == "WALL-OUTER").unwrap();
-    assert!(first_outer > last_inner);
+    // The outer wall comes after the inner one on each layer (near the bottom of the
+    // sphere the outer wall leans past the support angle: an overhang).
+    for layer in [5, 40] {
+        let here: Vec<&str> = r
+            .extrusions
+            .iter()
+            .filter(|x| x.layer == Some(layer))
+            .map(|x| x.feature.as_str())
+            .collect();
+        let last_inner = here.iter().rposition(|f| *f == "WALL-INNER").unwrap();
+        let first_outer = here
+            .iter()
+            .position(|f| *f == "WALL-OUTER" || *f == "OVERHANG")
+            .unwrap();
+        assert!(first_outer > last_inner, "layer {layer}: {here:?}");
+    }
+    let at = |layer: usize, f: &str| {
+        r.extrusions
+            .iter()
+            .any(|x| x.layer == Some(layer) && x.feature == f)
+    };
+    assert!(at(5, "OVERHANG") && !at(40, "OVERHANG"));
 }
 
 #[test]

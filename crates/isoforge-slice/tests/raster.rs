@@ -14,6 +14,7 @@ fn display() -> GridSpec {
         width: 900,
         height: 900,
         pixel: PIXEL,
+        frame: isoforge_slice::DisplayFrame::default(),
     }
 }
 

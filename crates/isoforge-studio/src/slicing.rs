@@ -5,8 +5,8 @@
 use std::io::Cursor;
 
 use isoforge_slice::{
-    GcodeJob, GridSpec, Profile, ProfileError, SliceError, Source, Technology, render_layers, sl1,
-    slice_gcode,
+    GcodeJob, GridSpec, Profile, ProfileError, SliceError, Source, Technology, render_layers_from,
+    sl1, slice_gcode,
 };
 use serde::Serialize;
 
@@ -140,9 +140,17 @@ pub fn sl1_archive(model: &Loaded, profile: &Profile, job: &str) -> Result<Vec<u
         width: r.resolution[0],
         height: r.resolution[1],
         pixel: r.pixel_size,
+        frame: r.frame(),
     };
     let source = Source::field(&model.shape, model.bounds);
-    let images = render_layers(&source, r.layer_height, spec, &|_, _| {})?;
+    // As `isoforge slice --sl1`: the display's orientation and the resin's own first layer.
+    let images = render_layers_from(
+        &source,
+        r.first_layer_height,
+        r.layer_height,
+        spec,
+        &|_, _| {},
+    )?;
     let thumb = sl1::thumbnail(
         &images.silhouette,
         images.silhouette_size.0,

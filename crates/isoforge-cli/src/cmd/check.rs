@@ -1,5 +1,6 @@
 //! `isoforge check`: read a mesh file and report whether it is printable (closed, manifold,
-//! consistently oriented), with its figures.
+//! consistently oriented), with its figures; a G-code file is summed up instead
+//! (`check_gcode.rs`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -19,7 +20,8 @@ use crate::common::{Global, ModelArgs, print_json};
                         2 the file cannot be read."
 )]
 pub struct CheckArgs {
-    /// The mesh file: STL (binary or ASCII), 3MF, OBJ or PLY.
+    /// The mesh file: STL (binary or ASCII), 3MF, OBJ or PLY; or a G-code file (.gcode),
+    /// any slicer's, summed up: layers, retractions, layer times, volume by feature.
     pub mesh: PathBuf,
     /// Also measure how far the mesh is from this model's surface (largest and mean
     /// distance, by the model's field).
@@ -41,6 +43,15 @@ pub struct CheckArgs {
 
 /// Runs the command.
 pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
+    let ext = args
+        .mesh
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    if super::check_gcode::GCODE_EXTENSIONS.contains(&ext.as_str()) {
+        return super::check_gcode::run(&args.mesh, global);
+    }
     let mesh = match read_mesh(&args.mesh) {
         Ok(m) => m,
         // The contract: 2 when the file cannot be read (1 is kept for "read, and broken").

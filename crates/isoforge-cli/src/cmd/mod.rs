@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod check;
+pub mod check_gcode;
 pub mod fake_printer;
 pub mod info;
 pub mod mesh;

@@ -9,8 +9,8 @@ use anyhow::{Result, bail};
 use clap::{ArgGroup, Args};
 use isoforge_mesh::Mesh;
 use isoforge_slice::{
-    GridSpec, Origin, Profile, ProfileError, ProfileErrorKind, SliceError, Source, Technology,
-    render_layers, sl1, slice_gcode, svx,
+    Control, GridSpec, Origin, Profile, ProfileError, ProfileErrorKind, SliceError, Source,
+    Technology, check, preview, render_layers_from, sl1, slice_plate, svx,
 };
 
 use isoforge_output::{Options, OutputFile, OutputFolder};
@@ -21,9 +21,22 @@ use crate::common::{Global, ModelArgs, print_json, progress_bar, usage};
 #[derive(Args, Debug)]
 #[command(group(ArgGroup::new("destination").required(true).args(["output", "sl1", "svx", "png_dir"])))]
 pub struct SliceArgs {
-    /// The model script (.rhai, .vm) or mesh (.stl, .3mf, .obj, .ply), with its overrides.
-    #[command(flatten)]
-    pub model: ModelArgs,
+    /// The models: scripts (.rhai, .vm) or meshes (.stl, .3mf, .obj, .ply). Several models
+    /// (G-code only) are arranged on the bed side by side.
+    #[arg(required = true, num_args = 1.., value_name = "MODEL")]
+    pub models: Vec<PathBuf>,
+    /// Set a script parameter: NAME=VALUE (repeatable; applies to every script).
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    pub params: Vec<String>,
+    /// The region: X0,Y0,Z0,X1,Y1,Z1 (overrides each script's bounds).
+    #[arg(long, value_name = "X0,Y0,Z0,X1,Y1,Z1", allow_hyphen_values = true)]
+    pub bounds: Option<String>,
+    /// Stop a script that runs longer than this (wall-clock seconds).
+    #[arg(long, value_name = "SECONDS", default_value_t = isoforge_script::DEFAULT_MAX_SECONDS)]
+    pub script_timeout: f64,
+    /// Stop a script that makes isoforge grow by more than this (MiB; Linux).
+    #[arg(long, value_name = "MIB", default_value_t = isoforge_script::DEFAULT_MAX_MEMORY_BYTES >> 20)]
+    pub script_memory: u64,
     /// Printer profile (TOML); defaults to a generic 220 x 220 Marlin printer for G-code and
     /// an SL1 for images (fixtures/printers/ holds examples).
     #[arg(long, value_name = "FILE")]
@@ -43,7 +56,23 @@ pub struct SliceArgs {
     /// Write the layer PNGs alone, DIR/00000.png upward.
     #[arg(long, value_name = "DIR")]
     pub png_dir: Option<PathBuf>,
+    /// With -o: also draw pictures of layers into DIR (layer-00042.png), every line
+    /// coloured by its feature.
+    #[arg(long, value_name = "DIR", requires = "output")]
+    pub preview_layers: Option<PathBuf>,
+    /// The layers to draw, e.g. 0,10,42 (default: the first, quarters, the last, and the
+    /// first with a bridge, overhang or support).
+    #[arg(
+        long,
+        value_name = "N,N,...",
+        value_delimiter = ',',
+        requires = "preview_layers"
+    )]
+    pub preview_at: Vec<usize>,
 }
+
+/// Pictures are this many pixels along their longer side.
+const PREVIEW_SIZE: u32 = 1000;
 
 const MESH_EXTENSIONS: &[&str] = &["stl", "3mf", "obj", "ply"];
 
@@ -62,24 +91,30 @@ impl Loaded {
     }
 }
 
-fn load(args: &ModelArgs) -> Result<Loaded> {
-    let ext = args
-        .model
+fn load(args: &SliceArgs, model: &Path) -> Result<Loaded> {
+    let ext = model
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
     if MESH_EXTENSIONS.contains(&ext.as_str()) {
-        if !args.params.is_empty() || args.bounds.is_some() {
+        if args.models.len() == 1 && (!args.params.is_empty() || args.bounds.is_some()) {
             bail!(
                 "{}: --param and --bounds apply to model scripts, not meshes",
-                args.model.display()
+                model.display()
             );
         }
-        let mesh = isoforge_mesh::read_mesh(&args.model)?;
+        let mesh = isoforge_mesh::read_mesh(model)?;
         return Ok(Loaded::Mesh(mesh));
     }
-    let m = args.load()?;
+    let m = ModelArgs {
+        model: model.to_path_buf(),
+        params: args.params.clone(),
+        bounds: args.bounds.clone(),
+        script_timeout: args.script_timeout,
+        script_memory: args.script_memory,
+    }
+    .load()?;
     Ok(Loaded::Field(m.model.shape, m.bounds))
 }
 
@@ -136,7 +171,7 @@ fn slice_error(e: SliceError) -> anyhow::Error {
 
 /// Where the slices go, checked and ready before the work (one destination is required).
 enum Destination {
-    Gcode(OutputFile),
+    Gcode(OutputFile, Option<OutputFolder>),
     Images(Images),
 }
 
@@ -151,12 +186,24 @@ impl Destination {
     /// Refuses an output that is the model or the profile, a missing folder, a read-only
     /// file, or a --png-dir that is not empty, before any slicing.
     fn prepare(args: &SliceArgs) -> Result<Destination> {
-        let mut inputs: Vec<&Path> = vec![&args.model.model];
+        let mut inputs: Vec<&Path> = args.models.iter().map(PathBuf::as_path).collect();
         inputs.extend(args.profile.as_deref());
         let options = Options::with_inputs(&inputs);
         let file = |p: &Path| OutputFile::prepare(p, options);
+        if args.output.is_none() && args.models.len() > 1 {
+            return Err(usage(
+                "layer images (--sl1, --svx, --png-dir) take one model; several models are \
+                 arranged on the bed for G-code (-o)",
+            ));
+        }
         Ok(match (&args.output, &args.sl1, &args.svx, &args.png_dir) {
-            (Some(out), _, _, _) => Destination::Gcode(file(out)?),
+            (Some(out), _, _, _) => {
+                let pictures = match &args.preview_layers {
+                    Some(dir) => Some(OutputFolder::prepare(dir, options)?),
+                    None => None,
+                };
+                Destination::Gcode(file(out)?, pictures)
+            }
             (_, Some(out), _, _) => Destination::Images(Images::Sl1(file(out)?)),
             (_, _, Some(out), _) => Destination::Images(Images::Svx(file(out)?)),
             (_, _, _, Some(dir)) => {
@@ -175,9 +222,15 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
     let resin = args.output.is_none();
     // Settings first: a bad profile is reported before any slow work.
     let p = profile(&args, resin)?;
-    let loaded = load(&args.model)?;
+    // The outputs first: a bad one is refused before any slow work.
     let destination = Destination::prepare(&args)?;
-    let source = loaded.source();
+    let loaded = args
+        .models
+        .iter()
+        .map(|m| load(&args, m))
+        .collect::<Result<Vec<_>>>()?;
+    let sources: Vec<Source> = loaded.iter().map(Loaded::source).collect();
+    let source = sources[0];
     let bar = progress_bar(global, 0, "slicing");
     let progress = |done: usize, total: usize| {
         bar.set_length(total as u64);
@@ -186,13 +239,19 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
 
     let images_out = match destination {
         Destination::Images(images) => images,
-        Destination::Gcode(file) => {
+        Destination::Gcode(file, pictures) => {
             let out = file.path().to_path_buf();
             let s = p.fdm().map_err(profile_error)?;
-            let job = slice_gcode(&source, &s, &progress).map_err(slice_error)?;
+            // A signal ends the command (and removes the unfinished output) by itself.
+            let control = Control::new(&progress);
+            let job = slice_plate(&sources, &s, &control).map_err(slice_error)?;
             bar.finish_and_clear();
             file.write_with(|w| Ok::<_, anyhow::Error>(w.write_all(job.gcode.as_bytes())?))?;
+            if let Some(folder) = pictures {
+                write_pictures(folder, &job.gcode, &args.preview_at, s.filament_diameter)?;
+            }
             let seconds = started.elapsed().as_secs_f64();
+            let warnings: Vec<String> = job.warnings.iter().map(ToString::to_string).collect();
             if global.json {
                 print_json(&serde_json::json!({
                     "layers": job.stats.layers,
@@ -200,8 +259,13 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
                     "filament_mm": job.stats.filament_mm,
                     "filament_g": job.stats.filament_g,
                     "estimated_print_seconds": job.stats.seconds,
+                    "retractions": job.stats.retractions,
+                    "warnings": warnings,
                 }));
             } else if !global.quiet {
+                for w in &warnings {
+                    eprintln!("warning: {w}");
+                }
                 eprintln!(
                     "{}: {} layers, {:.2} m of filament ({:.1} g), about {:.0} min to print; sliced in {:.2} s",
                     out.display(),
@@ -217,7 +281,14 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
     };
 
     let r = p.resin().map_err(profile_error)?;
-    let spec = if matches!(images_out, Images::Svx(_)) {
+    // Voxels are cubes: an SVX's first layer is as thick as the others.
+    let voxels = matches!(images_out, Images::Svx(_));
+    let first = if voxels {
+        r.layer_height
+    } else {
+        r.first_layer_height
+    };
+    let spec = if voxels {
         GridSpec::Fit {
             pixel: r.layer_height,
         }
@@ -226,9 +297,11 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
             width: r.resolution[0],
             height: r.resolution[1],
             pixel: r.pixel_size,
+            frame: r.frame(),
         }
     };
-    let images = render_layers(&source, r.layer_height, spec, &progress).map_err(slice_error)?;
+    let images =
+        render_layers_from(&source, first, r.layer_height, spec, &progress).map_err(slice_error)?;
     bar.finish_and_clear();
     let height = images.layers.last().map_or(0.0, |l| l.top);
     if height > r.max_height {
@@ -291,12 +364,41 @@ pub fn run(args: SliceArgs, global: &Global) -> Result<ExitCode> {
             "{}: {} layers of {} x {} pixels; sliced in {:.2} s",
             written.display(),
             images.layers.len(),
-            images.grid.width,
-            images.grid.height,
+            images.image_size()[0],
+            images.image_size()[1],
             seconds
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Draws the chosen layers of the G-code just written.
+fn write_pictures(
+    mut folder: OutputFolder,
+    gcode: &str,
+    at: &[usize],
+    filament: f64,
+) -> Result<()> {
+    let report = check::parse(gcode)?;
+    let layers = if at.is_empty() {
+        preview::default_layers(&report)
+    } else {
+        at.to_vec()
+    };
+    let view = preview::View::fit(&report, PREVIEW_SIZE);
+    for l in layers {
+        if l >= report.layers.len() {
+            return Err(usage(format!(
+                "--preview-at {l}: the print has {} layers (0 to {})",
+                report.layers.len(),
+                report.layers.len().saturating_sub(1)
+            )));
+        }
+        let png = preview::draw_layer(&report, l, &view, filament)?;
+        folder.write(&format!("layer-{l:05}.png"), &png)?;
+    }
+    folder.commit()?;
+    Ok(())
 }
 
 /// The job name SL1 uses for its folder and image names: the output's file stem, kept to

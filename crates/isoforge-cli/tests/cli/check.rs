@@ -149,3 +149,43 @@ fn against_a_model_measures_the_distance_to_its_surface() {
     assert_ne!(run.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&run.stderr).contains("no/such/model.rhai"));
 }
+
+#[test]
+fn gcode_files_are_summed_up() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode = dir.path().join("pins.gcode");
+    let model = fixtures().join("slice/pins.rhai");
+    let run = isoforge(&[
+        "slice",
+        &model.display().to_string(),
+        "-o",
+        &gcode.display().to_string(),
+        "--set",
+        "infill_density=1",
+        "-q",
+    ]);
+    assert!(run.status.success());
+    let out = isoforge(&["check", &gcode.display().to_string(), "--json"]);
+    assert_eq!(out.status.code(), Some(0));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // 10 mm pins in 0.2 mm layers, held to the default 10 s minimum layer time.
+    assert_eq!(v["layers"].as_u64(), Some(50));
+    assert!(v["retractions"].as_u64().unwrap() >= 49);
+    assert!(v["layer_seconds_min"].as_f64().unwrap() >= 10.0);
+    // Printed solid, the pins' volume π/4 · (1 + 4 + 9 + 16 + 25) mm² · 10 mm is extruded.
+    let part: f64 = v["volume_mm3"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .filter(|(k, _)| k.as_str() != "SKIRT")
+        .map(|(_, v)| v.as_f64().unwrap())
+        .sum();
+    let want = std::f64::consts::FRAC_PI_4 * 55.0 * 10.0;
+    assert!((part / want - 1.0).abs() < 0.15, "{part} vs {want}");
+    // Not G-code at all: exit 2 naming the file.
+    let bad = dir.path().join("bad.gcode");
+    std::fs::write(&bad, "G1 X1 Ynope\n").unwrap();
+    let out = isoforge(&["check", &bad.display().to_string()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("bad.gcode"));
+}

@@ -5,6 +5,7 @@
 
 mod bad_scripts;
 mod browser;
+mod calibration;
 mod check;
 mod dialects;
 mod help;
@@ -12,6 +13,7 @@ mod info;
 mod interop;
 mod mesh;
 mod outputs;
+mod peers;
 mod print;
 mod render;
 mod slice;

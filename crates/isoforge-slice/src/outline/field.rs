@@ -15,7 +15,7 @@
 
 use std::collections::HashMap;
 
-use isoforge_field::{Bounds, ClippedField, Interval, IntervalEval, PointEval, Shape};
+use isoforge_field::{Bounds, ClippedField, GradEval, Interval, IntervalEval, PointEval, Shape};
 
 use crate::geom::{Contour, Point, simplify_closed};
 use crate::outline::march::{EdgeKey, cell_segments, chain, edge_corners};
@@ -205,6 +205,28 @@ impl FieldSlicer {
             }
         }
         out
+    }
+
+    /// How far the surface faces down at each point of `contours` (at height `z`): −n_z of
+    /// the field's unit gradient there, the exact normal of the model.
+    pub fn tilts(&self, contours: &[Contour], z: f64) -> Vec<Vec<f32>> {
+        let mut ev = GradEval::new();
+        contours
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .map(|p| {
+                        let g = self.field.grad(&mut ev, [p[0], p[1], z]);
+                        let len = (g.d[0] * g.d[0] + g.d[1] * g.d[1] + g.d[2] * g.d[2]).sqrt();
+                        if len.is_finite() && len > 0.0 {
+                            (-g.d[2] / len) as f32
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
     }
 
     /// The crossing on an edge, by bisection on the field between its inside and outside

@@ -9,7 +9,7 @@ use std::collections::HashMap;
 
 use isoforge_mesh::Mesh;
 
-use crate::geom::{Contour, simplify_closed};
+use crate::geom::{Contour, simplify_closed_indices};
 use crate::outline::march::chain;
 use crate::{MeshProblem, SliceError};
 
@@ -118,12 +118,19 @@ impl<'a> MeshSlicer<'a> {
 
     /// The outline at height `z`: outer contours counter-clockwise, holes clockwise.
     pub fn outline(&self, z: f64) -> Vec<Contour> {
+        self.outline_with_tilts(z).0
+    }
+
+    /// The outline at height `z`, and at each of its points how far the surface there
+    /// faces down: −n_z of the unit normal of the triangle the outline crosses next.
+    pub fn outline_with_tilts(&self, z: f64) -> (Vec<Contour>, Vec<Vec<f32>>) {
         let mesh = self.mesh;
         let zf = z as f32;
         let end = self.order.partition_point(|t| t.0 <= zf);
         let above = |v: u32| mesh.vertices[v as usize][2] as f64 >= z;
         let key = |a: u32, b: u32| if a < b { (a, b) } else { (b, a) };
         let mut segments = Vec::new();
+        let mut tilt_of: HashMap<(u32, u32), f32> = HashMap::new();
         for &(_, zmax, t) in &self.order[..end] {
             if zmax < zf {
                 continue;
@@ -146,6 +153,7 @@ impl<'a> MeshSlicer<'a> {
             }
             if let (Some(s), Some(e)) = (s, e) {
                 segments.push((s, e));
+                tilt_of.insert(s, facing_down(mesh, tri));
             }
         }
         let point = |(a, b): (u32, u32)| {
@@ -153,16 +161,42 @@ impl<'a> MeshSlicer<'a> {
             let t = (z - pa[2]) / (pb[2] - pa[2]);
             [pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1])]
         };
-        chain(&segments)
-            .into_iter()
-            .filter(|c| c.closed && c.edges.len() >= 3)
-            .map(|c| {
-                let pts: Contour = c.edges.into_iter().map(point).collect();
-                simplify_closed(&pts, self.tolerance)
-            })
-            .filter(|c| c.len() >= 3)
-            .collect()
+        let mut contours = Vec::new();
+        let mut tilts = Vec::new();
+        for c in chain(&segments) {
+            if !c.closed || c.edges.len() < 3 {
+                continue;
+            }
+            let pts: Contour = c.edges.iter().map(|&e| point(e)).collect();
+            let keep = simplify_closed_indices(&pts, self.tolerance);
+            if keep.len() < 3 {
+                continue;
+            }
+            contours.push(keep.iter().map(|&i| pts[i]).collect());
+            tilts.push(
+                keep.iter()
+                    .map(|&i| tilt_of.get(&c.edges[i]).copied().unwrap_or(0.0))
+                    .collect(),
+            );
+        }
+        (contours, tilts)
     }
+}
+
+/// −n_z of a triangle's unit normal: 1 for a face looking straight down, 0 for a wall.
+fn facing_down(mesh: &Mesh, tri: [u32; 3]) -> f32 {
+    let [a, b, c] = tri.map(|v| at(mesh, v));
+    let (u, v) = (
+        [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+        [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+    );
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if len > 0.0 { (-n[2] / len) as f32 } else { 0.0 }
 }
 
 #[cfg(test)]

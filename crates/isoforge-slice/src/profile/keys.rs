@@ -103,7 +103,7 @@ pub const KEYS: &[KeySpec] = &[
         "first layer height",
         "mm",
         real(0.01, 2.0),
-        Fdm,
+        Both,
     ),
     // From 0.1 mm micro nozzles to 2 mm volcano-style ones.
     key(
@@ -216,7 +216,7 @@ pub const KEYS: &[KeySpec] = &[
     ),
     key(
         "fan_speed",
-        "part fan from layer 2 on",
+        "part fan on short layers",
         "",
         real(0.0, 1.0),
         Fdm,
@@ -237,6 +237,231 @@ pub const KEYS: &[KeySpec] = &[
         real(1.0, 2000.0),
         Both,
     ),
+    // Print quality (names as PrusaSlicer's where it has one). Speeds share print_speed's
+    // range; angles are degrees from vertical.
+    key(
+        "external_perimeter_speed",
+        "outer wall speed",
+        "mm/s",
+        real(1.0, 1000.0),
+        Fdm,
+    ),
+    key(
+        "top_solid_infill_speed",
+        "top surface speed",
+        "mm/s",
+        real(1.0, 1000.0),
+        Fdm,
+    ),
+    key(
+        "gap_fill_speed",
+        "thin wall and gap fill speed",
+        "mm/s",
+        real(1.0, 1000.0),
+        Fdm,
+    ),
+    key(
+        "bridge_speed",
+        "bridge and overhang speed",
+        "mm/s",
+        real(1.0, 1000.0),
+        Fdm,
+    ),
+    key(
+        "support_material_speed",
+        "support speed",
+        "mm/s",
+        real(1.0, 1000.0),
+        Fdm,
+    ),
+    key(
+        "ironing_speed",
+        "ironing speed",
+        "mm/s",
+        real(1.0, 1000.0),
+        Fdm,
+    ),
+    // Top surfaces are often printed a little narrower than the nozzle for a smooth finish;
+    // the same 0.5 to 3 nozzle widths as line_width are checked in validate().
+    key(
+        "top_infill_extrusion_width",
+        "top surface line width",
+        "mm",
+        real(0.05, 6.0),
+        Fdm,
+    ),
+    // Bridges are laid as round strands; their flow is a ratio of a nozzle-wide strand's.
+    // Below 0.5 strands break, above 2 they sag into a blob.
+    key(
+        "bridge_flow",
+        "bridge strand flow ratio",
+        "",
+        real(0.5, 2.0),
+        Fdm,
+    ),
+    key(
+        "bridge_fan_speed",
+        "part fan on bridges and overhangs",
+        "",
+        real(0.0, 1.0),
+        Fdm,
+    ),
+    key(
+        "thin_walls",
+        "walls thinner than two lines printed (bool)",
+        "",
+        None,
+        Fdm,
+    ),
+    key(
+        "gap_fill",
+        "gaps between walls filled (bool)",
+        "",
+        None,
+        Fdm,
+    ),
+    key(
+        "top_fill_pattern",
+        "\"monotonic\" or \"rectilinear\"",
+        "",
+        None,
+        Fdm,
+    ),
+    key("ironing", "top surfaces ironed (bool)", "", None, Fdm),
+    key("supports", "\"none\", \"grid\" or \"tree\"", "", None, Fdm),
+    // 0 supports every downward surface, 90 nothing.
+    key(
+        "support_overhang_angle",
+        "overhang supported beyond this",
+        "°",
+        real(0.0, 90.0),
+        Fdm,
+    ),
+    // PrusaSlicer's contact distance: 0.1 to 0.3 mm peels off well with PLA; 0 welds.
+    key(
+        "support_z_gap",
+        "gap between support and part",
+        "mm",
+        real(0.0, 2.0),
+        Fdm,
+    ),
+    key(
+        "brim_width",
+        "brim around the first layer",
+        "mm",
+        real(0.0, 50.0),
+        Fdm,
+    ),
+    key(
+        "raft_layers",
+        "raft layers under the part",
+        "",
+        whole(0.0, 10.0),
+        Fdm,
+    ),
+    // Cooling: PLA wants 5-15 s a layer; two minutes covers any material.
+    key(
+        "min_layer_time",
+        "slow down below this layer time",
+        "s",
+        real(0.0, 120.0),
+        Fdm,
+    ),
+    key(
+        "slowdown_min_speed",
+        "slowest speed cooling may use",
+        "mm/s",
+        real(1.0, 1000.0),
+        Fdm,
+    ),
+    key(
+        "fan_below_layer_time",
+        "fan rises above min_fan_speed below this layer time",
+        "s",
+        real(0.0, 1000.0),
+        Fdm,
+    ),
+    key(
+        "min_fan_speed",
+        "part fan on long layers",
+        "",
+        real(0.0, 1.0),
+        Fdm,
+    ),
+    key(
+        "fan_first_layers",
+        "layers over which the fan ramps up (first layer off)",
+        "",
+        whole(0.0, 100.0),
+        Fdm,
+    ),
+    // Travel: lifts of a few tenths clear a bumpy top; 10 mm is a generous ceiling.
+    key(
+        "z_hop",
+        "lift on retracted travel",
+        "mm",
+        real(0.0, 10.0),
+        Fdm,
+    ),
+    key(
+        "wipe",
+        "wipe the nozzle along the path on retraction (bool)",
+        "",
+        None,
+        Fdm,
+    ),
+    key(
+        "combing",
+        "travel inside the part without retracting (bool)",
+        "",
+        None,
+        Fdm,
+    ),
+    // The planner's limits (Marlin's M201/M204/M205 J): hobby printers accelerate at
+    // 500-5000 mm/s²; junction deviation is 0.01-0.1 mm.
+    key(
+        "machine_max_acceleration_extruding",
+        "acceleration while printing",
+        "mm/s²",
+        real(10.0, 100_000.0),
+        Fdm,
+    ),
+    key(
+        "machine_max_acceleration_travel",
+        "acceleration on travel",
+        "mm/s²",
+        real(10.0, 100_000.0),
+        Fdm,
+    ),
+    key(
+        "junction_deviation",
+        "Marlin's junction deviation",
+        "mm",
+        real(0.001, 1.0),
+        Fdm,
+    ),
+    // Lead screws move Z at 5-25 mm/s.
+    key(
+        "machine_max_feedrate_z",
+        "fastest Z move",
+        "mm/s",
+        real(0.5, 100.0),
+        Fdm,
+    ),
+    key(
+        "vase_mode",
+        "one spiral outer wall, no top (bool)",
+        "",
+        None,
+        Fdm,
+    ),
+    key(
+        "copies",
+        "copies arranged on the bed",
+        "",
+        whole(1.0, 100.0),
+        Fdm,
+    ),
     key("start_gcode", "start G-code template", "", None, Fdm),
     key("end_gcode", "end G-code template", "", None, Fdm),
     // Resin displays have pixels of about 20-80 µm.
@@ -250,7 +475,7 @@ pub const KEYS: &[KeySpec] = &[
     // 12K displays are 11520 x 5120; one 16384 x 16384 layer is already 256 MB.
     key(
         "resolution",
-        "display [width, height]",
+        "layer image [width, height]",
         "px",
         whole(1.0, 16384.0),
         Resin,
@@ -274,6 +499,29 @@ pub const KEYS: &[KeySpec] = &[
         "layers fading from first to normal exposure",
         "",
         whole(0.0, 200.0),
+        Resin,
+    ),
+    // How the display shows the image (PrusaSlicer's names): the SL1 is portrait and
+    // mirrored in x.
+    key(
+        "display_orientation",
+        "\"portrait\" or \"landscape\"",
+        "",
+        None,
+        Resin,
+    ),
+    key(
+        "display_mirror_x",
+        "image mirrored in x (bool)",
+        "",
+        None,
+        Resin,
+    ),
+    key(
+        "display_mirror_y",
+        "image mirrored in y (bool)",
+        "",
+        None,
         Resin,
     ),
     key(
@@ -318,9 +566,15 @@ pub fn markdown_rows() -> Vec<String> {
     let resin = super::Profile::default_resin();
     KEYS.iter()
         .map(|s| {
-            let range = s
-                .range
-                .map_or("text".to_string(), |r| super::error::range_text(&r, ""));
+            let is_flag = matches!(
+                fdm.raw(s.key).or(resin.raw(s.key)),
+                Some(toml::Value::Boolean(_))
+            );
+            let range = match s.range {
+                Some(r) => super::error::range_text(&r, ""),
+                None if is_flag => "true or false".to_string(),
+                None => "text".to_string(),
+            };
             let show = |v: &toml::Value| match v {
                 toml::Value::String(t) if t.contains('\n') => "(template)".to_string(),
                 other => other.to_string(),

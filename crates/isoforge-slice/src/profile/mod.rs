@@ -16,7 +16,10 @@ use std::path::Path;
 
 pub use error::{Origin, ProfileError, ProfileErrorKind};
 pub use keys::UsedBy;
-pub use settings::{FdmSettings, InfillPattern, ResinSettings, Technology};
+pub use settings::{
+    DisplayOrientation, FdmSettings, InfillPattern, ResinSettings, SupportStyle, Technology,
+    TopFillPattern,
+};
 pub use template::PLACEHOLDERS;
 
 pub(crate) use template::fill as fill_template;
