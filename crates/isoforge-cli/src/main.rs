@@ -4,6 +4,7 @@
 
 mod cmd;
 mod common;
+mod machine;
 mod signals;
 
 use std::process::ExitCode;

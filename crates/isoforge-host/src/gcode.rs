@@ -130,7 +130,7 @@ pub fn frame(line: u64, command: &str, source_line: usize) -> Result<String, Gco
 
 /// Reads a G-code file.
 pub fn read_file(path: &Path) -> Result<Program, GcodeError> {
-    let bytes = std::fs::read(path).map_err(|source| GcodeError::Io {
+    let bytes = isoforge_output::read_input(path).map_err(|source| GcodeError::Io {
         path: path.display().to_string(),
         source,
     })?;
@@ -321,5 +321,65 @@ mod tests {
         assert_eq!(code("M104 S200"), "M104");
         assert_eq!(code("T1"), "T1");
         assert_eq!(code("X10"), "");
+    }
+}
+
+#[cfg(test)]
+mod proptests {
+    use proptest::prelude::*;
+
+    use super::*;
+
+    /// A small whole job (start code, layers, end code): the seed mutations start from.
+    fn sample() -> String {
+        include_str!("../../../fixtures/gcode/square-tube.gcode").to_string()
+    }
+
+    /// What every program `parse` accepts must hold: commands with text and a source line,
+    /// each of which frames within the limit, layers in order pointing inside the program.
+    fn assert_valid(p: &Program) {
+        let worst_line = p.commands.len() as u64 * 2 + PRELUDE_ALLOWANCE;
+        for c in &p.commands {
+            assert!(!c.text.is_empty());
+            assert!(c.source_line >= 1);
+            assert!(frame(worst_line, &c.text, c.source_line).is_ok());
+        }
+        for pair in p.layers.windows(2) {
+            assert!(pair[0].first_command <= pair[1].first_command);
+        }
+        for l in &p.layers {
+            assert!(l.first_command <= p.commands.len());
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        #[test]
+        fn random_bytes_give_a_program_or_a_located_error(
+            bytes in proptest::collection::vec(any::<u8>(), 0..600),
+        ) {
+            match parse(&String::from_utf8_lossy(&bytes)) {
+                Ok(p) => assert_valid(&p),
+                Err(e) => prop_assert!(e.to_string().contains("line"), "{e}"),
+            }
+        }
+
+        #[test]
+        fn mutated_slicer_files_give_a_program_or_a_located_error(
+            edits in proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..8),
+            cut in any::<prop::sample::Index>(),
+        ) {
+            let mut bytes = sample().into_bytes();
+            for (at, byte) in edits {
+                let i = at.index(bytes.len());
+                bytes[i] = byte;
+            }
+            bytes.truncate(cut.index(bytes.len() + 1));
+            match parse(&String::from_utf8_lossy(&bytes)) {
+                Ok(p) => assert_valid(&p),
+                Err(e) => prop_assert!(e.to_string().contains("line"), "{e}"),
+            }
+        }
     }
 }

@@ -13,7 +13,6 @@
 //! every `JOURNAL_CADENCE` (250 ms) while lines are acknowledged, and at once when the job stops,
 //! so after a crash it names a line that was executed, never one that was not.
 
-use std::fs;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -273,10 +272,11 @@ impl JournalRecord {
 
     /// Reads a journal file.
     pub fn load(path: &Path) -> Result<JournalRecord, JournalError> {
-        let text = fs::read_to_string(path).map_err(|source| JournalError::Io {
-            path: path.display().to_string(),
-            source,
-        })?;
+        let text =
+            isoforge_output::read_input_to_string(path).map_err(|source| JournalError::Io {
+                path: path.display().to_string(),
+                source,
+            })?;
         Self::parse(&text, &path.display().to_string())
     }
 
@@ -485,7 +485,7 @@ fn within(field: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<(), Inval
 /// journal's path that is not a journal at all. No file, or a finished job's journal, is
 /// fine. `restart` allows overwriting an unfinished job's journal, never a non-journal.
 pub fn check_can_start(path: &Path, restart: bool) -> Result<(), JournalError> {
-    let text = match fs::read(path) {
+    let text = match isoforge_output::read_input(path) {
         Ok(bytes) => bytes,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
         Err(source) => {
@@ -798,6 +798,7 @@ fn prelude_for(state: &MachineState) -> (Vec<String>, Vec<String>) {
 mod tests {
     use super::*;
     use crate::gcode::parse;
+    use std::fs;
 
     fn record(program: &Program, fp: u64, executed: usize) -> JournalRecord {
         let state =

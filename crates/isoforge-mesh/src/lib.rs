@@ -31,8 +31,8 @@ pub mod sink;
 
 pub use check::{MeshReport, StreamCheck, StreamReport, check};
 pub use dc::{
-    DEFAULT_TOLERANCE_CELLS, MAX_DEPTH, MeshError, MeshSettings, Progress, mesh_shape,
-    mesh_shape_into, try_mesh_shape,
+    DEFAULT_TOLERANCE_CELLS, Estimate, MAX_DEPTH, MeshError, MeshSettings, Progress, estimate,
+    mesh_shape, mesh_shape_into, try_mesh_shape,
 };
 pub use deviation::{Deviation, deviation};
 pub use io::{MeshFormat, MeshIoError, read_mesh, write_mesh};

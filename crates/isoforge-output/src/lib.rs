@@ -22,6 +22,10 @@
 //! - **No litter.** Temporary files are removed when dropped, and [`remove_temp_files`] removes
 //!   every live one: a program's signal handler calls it before exiting.
 //!
+//! Inputs have their one way too: [`read_input`] reads a regular file whole and takes at
+//! most [`MAX_STREAM_BYTES`] from anything else (`/dev/zero`, a FIFO), so no reader can be
+//! made to fill memory by an endless stream.
+//!
 //! ```no_run
 //! use std::io::Write;
 //! use std::path::Path;
@@ -39,12 +43,16 @@
 mod error;
 mod file;
 mod folder;
+mod input;
 mod registry;
 mod target;
 
 pub use error::OutputError;
 pub use file::{OutputFile, check_file, write_file};
 pub use folder::OutputFolder;
+pub use input::{
+    MAX_STREAM_BYTES, StreamTooLarge, read_input, read_input_capped, read_input_to_string,
+};
 pub use registry::{live_temp_files, remove_temp_files};
 
 use std::path::Path;

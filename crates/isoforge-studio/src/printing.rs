@@ -324,7 +324,7 @@ struct Prepared {
 /// What `isoforge print` does before sending a byte: read and parse the file, check the
 /// journal's place, plan a resume or make sure a fresh start loses no unfinished job.
 fn prepare(req: &PrintRequest) -> Result<Prepared, PrintError> {
-    let bytes = std::fs::read(&req.gcode).map_err(|source| PrintError::Read {
+    let bytes = isoforge_output::read_input(&req.gcode).map_err(|source| PrintError::Read {
         path: req.gcode.clone(),
         source,
     })?;

@@ -20,7 +20,7 @@ const DEFAULT_FILAMENT: f64 = 1.75;
 
 /// Checks a G-code file; exit 0 when it reads, 2 when it does not.
 pub fn run(path: &Path, global: &Global) -> Result<ExitCode> {
-    let text = match std::fs::read_to_string(path)
+    let text = match isoforge_output::read_input_to_string(path)
         .with_context(|| format!("{}: cannot be read", path.display()))
     {
         Ok(t) => t,

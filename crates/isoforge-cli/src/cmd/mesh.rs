@@ -8,11 +8,12 @@ use std::time::Instant;
 use anyhow::{Context as _, Result, bail};
 use clap::Args;
 use isoforge_mesh::io::MeshWriter;
-use isoforge_mesh::{MAX_DEPTH, MeshError, MeshFormat, MeshSettings, StreamCheck};
+use isoforge_mesh::{Estimate, MAX_DEPTH, MeshError, MeshFormat, MeshSettings, StreamCheck};
 use isoforge_output::{Options, OutputFile};
 use serde_json::json;
 
 use crate::common::{Global, ModelArgs, print_json, progress_bar};
+use crate::machine::human_bytes;
 
 /// The default finest level: the region's longest side in 256 cells.
 const DEFAULT_DEPTH: u8 = 8;
@@ -41,14 +42,41 @@ pub struct MeshArgs {
     /// stl (binary), stl-ascii, 3mf, obj or ply (default: from OUT's extension, else stl).
     #[arg(long, value_name = "F")]
     format: Option<String>,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most 256).
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
+    /// Mesh even when the estimated memory is more than the machine has available.
+    #[arg(long)]
+    no_memory_check: bool,
 }
+
+/// The most worker threads `--threads` takes: far more than any machine's cores, and few
+/// enough that starting them is quick (each reserves a stack).
+const MAX_THREADS: usize = 256;
 
 /// A usage error: message, exit status 2 (reported by `main`, with `--json` too).
 fn usage(message: String) -> Result<ExitCode> {
     Err(crate::common::usage(message))
+}
+
+/// Refuses a mesh whose estimated peak memory is more than the machine has available.
+fn check_fits(estimate: &Estimate, available: Option<u64>) -> Result<()> {
+    let Some(available) = available else {
+        return Ok(());
+    };
+    if estimate.bytes <= available as f64 {
+        return Ok(());
+    }
+    Err(crate::common::usage(format!(
+        "depth {}: about {:.1e} cells to sample in {:.1e} blocks near the surface would need \
+         about {} of memory, and this machine has {} available; use a smaller --depth (each level less \
+         needs about a quarter), a smaller region, or --no-memory-check to try anyway",
+        estimate.depth,
+        estimate.cells,
+        estimate.blocks,
+        human_bytes(estimate.bytes),
+        human_bytes(available as f64),
+    )))
 }
 
 /// The depth for a cell size: the first level whose cells are no larger.
@@ -102,8 +130,10 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
             "--tolerance {t}: expected a distance in mm, 0 or more"
         ));
     }
-    if args.threads == Some(0) {
-        return usage("--threads 0: expected at least 1".into());
+    if let Some(n) = args.threads
+        && !(1..=MAX_THREADS).contains(&n)
+    {
+        return usage(format!("--threads {n}: expected 1 to {MAX_THREADS}"));
     }
     let output = args
         .output
@@ -132,10 +162,15 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
     // file is refused now, not after minutes of meshing.
     let out = OutputFile::prepare(&output, Options::with_inputs(&[&args.model.model]))?;
 
-    let bar = progress_bar(global, 1000, "meshing");
     let mut settings = MeshSettings::new(bounds, depth);
     settings.threads = args.threads.unwrap_or(0);
     settings.tolerance = args.tolerance;
+    let estimate = isoforge_mesh::estimate(&loaded.model.shape, &settings);
+    if !args.no_memory_check {
+        check_fits(&estimate, crate::machine::available_memory())?;
+    }
+
+    let bar = progress_bar(global, 1000, "meshing");
     let bar_cb = bar.clone();
     settings.progress = Some(Arc::new(move |f: f64| {
         bar_cb.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64)
@@ -189,6 +224,11 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
             "manifold": report.manifold,
             "depth": depth,
             "tolerance": settings.effective_tolerance(),
+            "estimate": {
+                "blocks": estimate.blocks,
+                "cells": estimate.cells,
+                "bytes": estimate.bytes,
+            },
             "seconds": seconds,
         }));
     } else if !global.quiet {

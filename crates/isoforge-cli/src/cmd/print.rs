@@ -88,7 +88,7 @@ pub fn run(args: PrintArgs, global: &Global) -> Result<ExitCode> {
             args.timeout
         )));
     }
-    let bytes = std::fs::read(&args.file)
+    let bytes = isoforge_output::read_input(&args.file)
         .with_context(|| format!("{}: cannot read", args.file.display()))?;
     let program = gcode::parse(&String::from_utf8_lossy(&bytes))
         .with_context(|| format!("{}", args.file.display()))?;

@@ -137,6 +137,7 @@ fn usage_errors_exit_2_and_write_nothing() {
         vec!["--resolution", "1e-12"],
         vec!["--depth", "4", "--resolution", "0.1"],
         vec!["--threads", "0"],
+        vec!["--threads", "100000"],
         vec!["--depth", "many"],
     ] {
         let mut args = vec!["mesh", s(&sphere), "-o", s(&out)];
@@ -146,6 +147,40 @@ fn usage_errors_exit_2_and_write_nothing() {
         assert!(!run.stderr.is_empty(), "{extra:?} says why");
         assert!(!out.exists(), "{extra:?} wrote a file");
     }
+}
+
+#[test]
+fn a_mesh_too_large_for_the_machine_is_refused_at_once_with_the_estimate() {
+    // gyroid_sphere at depth 16: about 8e4 blocks at depth 11, times 4^5: some 170 GB by
+    // the estimate, more than any machine these tests run on has available.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("x.stl");
+    let model = fixtures().join("bench/gyroid_sphere.rhai");
+    let run = isoforge(&["mesh", s(&model), "-o", s(&out), "--depth", "16"]);
+    assert_eq!(run.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    for word in [
+        "depth 16",
+        "GiB of memory",
+        "available",
+        "--no-memory-check",
+    ] {
+        assert!(stderr.contains(word), "{word:?} missing: {stderr}");
+    }
+    assert!(!out.exists());
+    // The estimate is reported, and scales by 4 a level past the probe depth.
+    let json = |depth: &str| -> serde_json::Value {
+        let run = isoforge(&["mesh", s(&model), "-o", s(&out), "--depth", depth, "--json"]);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        serde_json::from_slice(&run.stdout).expect("json")
+    };
+    let five = json("5");
+    assert!(five["estimate"]["blocks"].as_f64().expect("blocks") >= 1.0);
+    assert!(five["estimate"]["bytes"].as_f64().expect("bytes") > 0.0);
 }
 
 #[test]

@@ -141,3 +141,28 @@ fn an_endless_model_file_is_refused_with_bounded_memory() {
         "{stderr}"
     );
 }
+
+#[test]
+fn an_endless_mesh_or_gcode_input_is_cut_off_with_a_clear_error() {
+    // /dev/zero as a mesh (check) and as G-code (print): at most the cap is taken from a
+    // non-file, then a message that names it, not a read until memory runs out.
+    let port = tempfile::tempdir().expect("tempdir");
+    let port = port.path().join("no-such-port");
+    for args in [
+        vec!["check", "/dev/zero"],
+        vec![
+            "print",
+            "/dev/zero",
+            "--port",
+            port.to_str().expect("utf-8"),
+        ],
+    ] {
+        let out = isoforge(&args);
+        assert_ne!(out.status.code(), Some(0), "{args:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains("/dev/zero") && stderr.contains("not a regular file"),
+            "{args:?}: {stderr}"
+        );
+    }
+}

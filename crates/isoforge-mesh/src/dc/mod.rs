@@ -23,6 +23,7 @@
 
 pub mod cell;
 pub mod contour;
+pub mod estimate;
 pub mod hermite;
 pub mod leaf;
 pub mod merge;
@@ -40,6 +41,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use isoforge_field::{Bounds, ClippedField, Shape};
+
+pub use estimate::{Estimate, estimate};
 
 use crate::mesh::Mesh;
 use crate::sink::MeshSink;

@@ -138,7 +138,7 @@ impl MeshIoError {
 
 /// Reads a mesh, choosing the format by content and extension.
 pub fn read_mesh(path: &Path) -> Result<Mesh, MeshIoError> {
-    let bytes = std::fs::read(path).map_err(|source| MeshIoError::Io {
+    let bytes = isoforge_output::read_input(path).map_err(|source| MeshIoError::Io {
         path: path.display().to_string(),
         source,
     })?;

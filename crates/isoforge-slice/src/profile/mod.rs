@@ -74,7 +74,7 @@ impl Profile {
 
     /// Reads a profile file.
     pub fn load(path: &Path) -> Result<Profile, ProfileError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ProfileError {
+        let text = isoforge_output::read_input_to_string(path).map_err(|e| ProfileError {
             origin: Some(Origin::File {
                 path: path.display().to_string(),
                 line: None,

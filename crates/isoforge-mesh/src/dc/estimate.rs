@@ -1,0 +1,89 @@
+//! What a mesh will cost before it is made, so that work which cannot fit the machine is
+//! refused at once instead of filling memory for minutes.
+//!
+//! The mesher's memory is, above everything else, one entry per octree block that may hold
+//! surface (its coordinates and simplified tape, kept from the octree pass to the end), plus
+//! a few slabs of cells. The blocks are counted by building the octree itself at a probe
+//! depth (cheap: at most 32³ blocks) and, for deeper meshes, scaled by 4 a level, as a
+//! surface's area in cells grows. Interval pruning keeps more blocks at coarse levels than
+//! at fine ones, so the scaled count errs high.
+
+use isoforge_field::Shape;
+
+use super::octree::{BLOCK_SHIFT, Grid, Octree};
+use super::{MeshSettings, tape_sampler};
+
+/// The depth the blocks are counted at; deeper meshes scale its count.
+const PROBE_DEPTH: u8 = 9;
+
+/// Peak bytes of a mesh run besides its blocks: the program, the writer's buffers, one
+/// slab's scratch per thread. Measured: `docs/meshing.md`, "Memory estimate".
+const BASE_BYTES: f64 = 24.0 * 1024.0 * 1024.0;
+
+/// Peak bytes per surface block, all stages together (fitted on the bench models at depths
+/// 10 to 12 and rounded up; `docs/meshing.md`).
+const BYTES_PER_BLOCK: f64 = 2048.0;
+
+/// The cost of meshing a shape at a depth, before any of it is done.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    /// The finest level estimated for.
+    pub depth: u8,
+    /// Blocks of 16³ cells that may hold surface: counted at depths up to the probe depth,
+    /// scaled from it beyond.
+    pub blocks: f64,
+    /// Finest cells in those blocks (each is sampled).
+    pub cells: f64,
+    /// Peak memory of the run, in bytes.
+    pub bytes: f64,
+}
+
+/// Estimates the cost of `mesh_shape_into(shape, settings, ..)`.
+pub fn estimate(shape: &Shape, settings: &MeshSettings) -> Estimate {
+    let depth = settings.depth;
+    let probe = depth.min(PROBE_DEPTH);
+    let sampler = tape_sampler(shape, settings);
+    let grid = Grid::new(&settings.bounds, u32::from(probe), BLOCK_SHIFT);
+    let counted = Octree::build(&sampler, grid).blocks.len() as f64;
+    let blocks = counted * 4f64.powi(i32::from(depth - probe));
+    let block_cells = f64::from(1u32 << (3 * BLOCK_SHIFT.min(u32::from(depth))));
+    Estimate {
+        depth,
+        blocks,
+        cells: blocks * block_cells,
+        bytes: BASE_BYTES + blocks * BYTES_PER_BLOCK,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use isoforge_field::Bounds;
+
+    fn sphere() -> Shape {
+        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+        x.square() + y.square() + z.square() - 1.0
+    }
+
+    #[test]
+    fn blocks_grow_four_times_a_level_beyond_the_probe() {
+        let bounds = Bounds::new([-1.5; 3], [1.5; 3]).unwrap();
+        let at = |d| estimate(&sphere(), &MeshSettings::new(bounds, d));
+        let (nine, ten, sixteen) = (at(9), at(10), at(16));
+        assert!(nine.blocks > 100.0, "{nine:?}");
+        assert_eq!(ten.blocks, nine.blocks * 4.0);
+        assert_eq!(sixteen.blocks, nine.blocks * 4f64.powi(7));
+        assert!(
+            sixteen.bytes > 16e9,
+            "depth 16 of a sphere is many GB: {sixteen:?}"
+        );
+    }
+
+    #[test]
+    fn an_empty_region_costs_only_the_base() {
+        let bounds = Bounds::new([5.0; 3], [6.0; 3]).unwrap();
+        let e = estimate(&sphere(), &MeshSettings::new(bounds, 12));
+        assert_eq!(e.blocks, 0.0);
+        assert_eq!(e.bytes, BASE_BYTES);
+    }
+}
