@@ -131,7 +131,7 @@ fn profile(args: &SliceArgs, resin: bool) -> Result<Profile> {
 }
 
 /// A profile error in the command line's words: an override is named as the `--set` it was,
-/// a malformed or unknown `--set` is a usage error, and a missing key says how to give it.
+/// any refused `--set` is a usage error, and a missing key says how to give it.
 fn profile_error(e: ProfileError) -> anyhow::Error {
     let from_set = matches!(e.origin, Some(Origin::Override { .. }));
     let text = match (&e.origin, &e.kind) {
@@ -148,12 +148,9 @@ fn profile_error(e: ProfileError) -> anyhow::Error {
         ),
         _ => e.to_string(),
     };
-    let usage_error = from_set
-        && matches!(
-            e.kind,
-            ProfileErrorKind::OverrideSyntax | ProfileErrorKind::UnknownKey { .. }
-        );
-    if usage_error {
+    // A `--set` is a flag value like `--depth`: out of range or malformed, it is a usage
+    // error (2), as `mesh --depth 40` is; the same value in a profile file is a bad input (1).
+    if from_set {
         usage(text)
     } else {
         anyhow::anyhow!(text)

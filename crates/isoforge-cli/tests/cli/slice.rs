@@ -281,11 +281,11 @@ fn bad_input_fails_cleanly_and_writes_nothing() {
             "layer_height",
             1,
         ),
-        // A negative override names the key.
+        // A negative override names the key; a flag value out of range is a usage error.
         (
             vec!["--set".into(), "line_width=-1".into()],
             "line_width",
-            1,
+            2,
         ),
         // An unknown key is refused, not ignored: a mistake in the call.
         (
@@ -360,7 +360,8 @@ fn profile_values_out_of_their_physical_range_are_refused() {
         ("perimeters=1000000", "a whole number from 0 to 20"),
     ] {
         let (code, err) = refused(&["--set", set], dir.path());
-        assert_eq!(code, Some(1), "{set}: {err}");
+        // A flag value out of range is a usage error, as `mesh --depth 40` is.
+        assert_eq!(code, Some(2), "{set}: {err}");
         let key = set.split('=').next().unwrap();
         assert!(
             err.contains(&format!("--set {set}")) && err.contains(&format!("`{key}`")),
