@@ -130,7 +130,7 @@ fn modern_fixtures_mesh_closed_at_depths_6_and_7() {
 }
 
 #[test]
-#[ignore = "minutes in a debug build: run with --release"]
+#[ignore = "minutes in a debug build: .ci/run runs it with --release --ignored"]
 fn modern_fixtures_mesh_closed_at_depths_8_and_9() {
     closed_at([8, 9], 0.01);
 }

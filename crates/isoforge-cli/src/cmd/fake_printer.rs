@@ -118,6 +118,7 @@ pub fn run(args: FakePrinterArgs, global: &Global) -> Result<ExitCode> {
         "dialect": args.dialect,
         "executed": printer.executed().len(),
         "faults": printer.fault_counts(),
+        "emergency": printer.emergency_counts(),
     });
     printer.wait().context("fake printer")?;
     if global.json {
@@ -145,8 +146,9 @@ fn refuse_foreign_log(path: &Path) -> Result<()> {
     let ours = line
         .split_once('\t')
         .is_some_and(|(n, _)| n == "-" || (!n.is_empty() && n.bytes().all(|b| b.is_ascii_digit())));
-    // A log of a session that executed nothing holds only its `# faults` line.
-    let ours = ours || line.starts_with("# faults");
+    // A log of a session that executed nothing holds only its `# emergency` and `# faults`
+    // lines.
+    let ours = ours || line.starts_with("# faults") || line.starts_with("# emergency");
     if first.is_empty() || ours {
         return Ok(());
     }

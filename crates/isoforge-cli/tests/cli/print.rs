@@ -21,8 +21,16 @@ impl FakeProcess {
     }
 
     fn start_with(args: &[&str], log: &Path) -> FakeProcess {
+        // Heating takes no time unless the test asks for it.
+        let heat: &[&str] = if args.contains(&"--heat-tick") {
+            &[]
+        } else {
+            &["--heat-tick", "0"]
+        };
         let mut child = Command::new(isoforge_bin())
-            .args(["fake-printer", "--heat-tick", "0", "--log"])
+            .arg("fake-printer")
+            .args(heat)
+            .arg("--log")
             .arg(log)
             .args(args)
             .stdout(Stdio::piped())
@@ -533,4 +541,102 @@ fn an_edited_journal_is_refused_and_sends_nothing() {
     assert_eq!(out.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains(journal_path.to_str().unwrap()), "{stderr}");
+}
+
+/// The fake printer's `# emergency m112=N m108=N` log line, as (m112, m108).
+fn emergency_counts(log: &Path) -> (u64, u64) {
+    let text = std::fs::read_to_string(log).expect("log");
+    let line = text
+        .lines()
+        .find_map(|l| l.strip_prefix("# emergency "))
+        .unwrap_or_else(|| panic!("no emergency line in the log:\n{text}"));
+    let count = |key: &str| -> u64 {
+        line.split_whitespace()
+            .find_map(|w| w.strip_prefix(key))
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("{key} in {line:?}"))
+    };
+    (count("m112="), count("m108="))
+}
+
+/// Starts `isoforge print FILE --port PORT --json EXTRA..` with stdin not a terminal.
+fn spawn_print(gcode: &Path, port: &str, extra: &[&str]) -> std::process::Child {
+    Command::new(isoforge_bin())
+        .args(["print", gcode.to_str().unwrap(), "--port", port, "--json"])
+        .args(extra)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+#[test]
+fn a_cancel_during_a_heating_wait_ends_it_with_m108_and_turns_the_heaters_off() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode_path = dir.path().join("heat.gcode");
+    std::fs::write(
+        &gcode_path,
+        "M140 S60\nM104 S200\nM109 S200\nG28\nG1 Z5 F600\nG1 X10 Y10 F3000\nM84\n",
+    )
+    .unwrap();
+    let log = dir.path().join("executed.tsv");
+    // 40 °C a tick, 4 s a tick: the wait for 200 °C lasts about 20 s unless interrupted.
+    let fake = FakeProcess::start_with(&["--heat-tick", "4"], &log);
+    let print = spawn_print(&gcode_path, &fake.port, &[]);
+    std::thread::sleep(Duration::from_secs(3));
+    let status = Command::new("kill")
+        .args(["-TERM", &print.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = print.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("cancelled"), "{stderr}");
+    fake.wait_exit();
+    // The wait was under way, and M108 ended it (the printer says so), ...
+    let done = logged_job(&log);
+    assert!(done.iter().any(|c| c == "M109 S200"), "{done:?}");
+    assert_eq!(emergency_counts(&log), (0, 1));
+    // ... then heaters and motors off; the homing queued behind the wait never ran.
+    assert!(!done.iter().any(|c| c == "G28"), "{done:?}");
+    assert_eq!(done[done.len() - 3..], ["M104 S0", "M140 S0", "M84"]);
+}
+
+#[test]
+fn emergency_cancel_sends_m112_and_the_printer_halts() {
+    let dir = tempfile::tempdir().unwrap();
+    let gcode_path = dir.path().join("vase.gcode");
+    std::fs::write(
+        &gcode_path,
+        isoforge_host::sample::vase_with_commands(5_000),
+    )
+    .unwrap();
+    let log = dir.path().join("executed.tsv");
+    // A slow link (9600 baud: about 30 lines a second) so the job is still running.
+    let fake = FakeProcess::start_with(&["--baud", "9600"], &log);
+    let print = spawn_print(&gcode_path, &fake.port, &["--emergency"]);
+    std::thread::sleep(Duration::from_millis(1500));
+    let status = Command::new("kill")
+        .args(["-TERM", &print.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = print.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&out.stdout).expect("JSON even when stopped");
+    assert_eq!(json["completed"], false);
+    fake.wait_exit();
+    // The printer's emergency parser took the M112 and halted: nothing ran after it, not
+    // even the shutdown commands the host sends for a firmware that ignores M112.
+    assert_eq!(emergency_counts(&log), (1, 0));
+    let done = logged_job(&log);
+    assert!(!done.is_empty() && done.len() < 5_000, "{} ran", done.len());
+    assert!(
+        !done.iter().any(|c| c == "M104 S0" || c == "M84"),
+        "{done:?}"
+    );
 }

@@ -42,6 +42,22 @@ pub struct Executed {
     pub command: String,
 }
 
+/// What the emergency parser acted on, so a test (or a user) can see that a host's `M112`
+/// or `M108` reached the printer and did what it is for, not only that the job stopped.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct EmergencyCounts {
+    /// `M112`s that halted the firmware.
+    pub m112: u64,
+    /// `M108`s that ended a heating wait (`M109`/`M190`).
+    pub m108: u64,
+}
+
+impl std::fmt::Display for EmergencyCounts {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "m112={} m108={}", self.m112, self.m108)
+    }
+}
+
 /// Settings of the model.
 #[derive(Clone, Debug)]
 pub struct FirmwareConfig {
@@ -132,6 +148,7 @@ pub struct Firmware {
     /// The one-shot events fire once per firmware life, not again after the reset they cause.
     fired: bool,
     counts: FaultCounts,
+    emergency: EmergencyCounts,
 }
 
 impl Firmware {
@@ -159,6 +176,7 @@ impl Firmware {
             last_activity: None,
             fired: false,
             counts: FaultCounts::default(),
+            emergency: EmergencyCounts::default(),
         };
         fw.banner();
         fw
@@ -185,6 +203,11 @@ impl Firmware {
     /// The faults injected so far.
     pub fn fault_counts(&self) -> FaultCounts {
         self.counts
+    }
+
+    /// What the emergency parser acted on so far.
+    pub fn emergency_counts(&self) -> EmergencyCounts {
+        self.emergency
     }
 
     /// Bytes lost because the receive ring was full.
@@ -242,10 +265,14 @@ impl Firmware {
                     for line in self.cfg.dialect.halt() {
                         self.out.push_back(line);
                     }
+                    if self.run != Run::Halted {
+                        self.emergency.m112 += 1;
+                    }
                     self.run = Run::Halted;
                 }
                 Ok(Some(c)) if c.code.is('M', 108) => {
                     if let Run::Heating { .. } = self.run {
+                        self.emergency.m108 += 1;
                         self.run = Run::Running;
                         self.ok(None);
                     }

@@ -26,7 +26,7 @@ use thiserror::Error;
 pub(crate) use faults::Rng;
 pub use faults::{FAULTS_HELP, FaultCounts, Faults, FaultsError};
 pub(crate) use firmware::Firmware;
-pub use firmware::{Executed, FirmwareConfig};
+pub use firmware::{EmergencyCounts, Executed, FirmwareConfig};
 
 /// How to run the fake printer.
 #[derive(Clone, Debug, Default)]
@@ -39,7 +39,8 @@ pub struct FakeConfig {
     /// can reconnect (tests of `--resume` do).
     pub exit_on_disconnect: bool,
     /// Record every executed command in this file (`<line>\t<command>`, `-` for
-    /// unnumbered), then a last line `# faults <counts>`. Written through
+    /// unnumbered), then `# emergency <counts>` (what `M112`/`M108` did) and a last line
+    /// `# faults <counts>`. Written through
     /// `isoforge-output`: it appears whole when the printer stops (a FIFO or terminal gets
     /// each line as it runs).
     pub log: Option<PathBuf>,
@@ -67,6 +68,7 @@ pub struct FakePrinter {
     stop: Arc<AtomicBool>,
     executed: Arc<Mutex<Vec<Executed>>>,
     counts: Arc<Mutex<FaultCounts>>,
+    emergency: Arc<Mutex<EmergencyCounts>>,
     thread: Option<JoinHandle<io::Result<()>>>,
 }
 
@@ -89,8 +91,10 @@ impl FakePrinter {
         let stop = Arc::new(AtomicBool::new(false));
         let executed = Arc::new(Mutex::new(Vec::new()));
         let counts = Arc::new(Mutex::new(FaultCounts::default()));
+        let emergency = Arc::new(Mutex::new(EmergencyCounts::default()));
         let link = Link {
             counts: counts.clone(),
+            emergency: emergency.clone(),
             master,
             slave: Some(slave),
             firmware: Firmware::new(cfg.firmware.clone()),
@@ -112,6 +116,7 @@ impl FakePrinter {
             stop,
             executed,
             counts,
+            emergency,
             thread: Some(thread),
         })
     }
@@ -132,6 +137,14 @@ impl FakePrinter {
     /// The faults injected so far.
     pub fn fault_counts(&self) -> FaultCounts {
         *self.counts.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// What the emergency parser acted on so far (`M112` halts, `M108` ended waits).
+    pub fn emergency_counts(&self) -> EmergencyCounts {
+        *self
+            .emergency
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
     }
 
     /// A handle that stops the printer from another thread (a signal handler), after which
@@ -189,6 +202,7 @@ struct Link {
     stop: Arc<AtomicBool>,
     executed: Arc<Mutex<Vec<Executed>>>,
     counts: Arc<Mutex<FaultCounts>>,
+    emergency: Arc<Mutex<EmergencyCounts>>,
 }
 
 /// Longest the loop sleeps with nothing scheduled, so `stop` is noticed promptly.
@@ -201,8 +215,14 @@ impl Link {
         let served = self.serve();
         let counts = self.firmware.fault_counts();
         *self.counts.lock().unwrap_or_else(PoisonError::into_inner) = counts;
+        let emergency = self.firmware.emergency_counts();
+        *self
+            .emergency
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner) = emergency;
         let logged = match self.log.take() {
-            Some(mut log) => writeln!(log, "# faults {counts}")
+            Some(mut log) => writeln!(log, "# emergency {emergency}")
+                .and_then(|()| writeln!(log, "# faults {counts}"))
                 .and_then(|()| log.into_inner().map_err(io::IntoInnerError::into_error))
                 .and_then(|out| out.commit().map_err(io::Error::from)),
             None => Ok(()),
@@ -254,7 +274,7 @@ impl Link {
                 match self.master.write_all(&write_now) {
                     Ok(()) => {}
                     Err(e) if is_disconnect(&e) && !self.exit_on_disconnect => {}
-                    Err(e) if is_disconnect(&e) => return Ok(()),
+                    Err(e) if is_disconnect(&e) => return self.deliver_in_flight(inbound),
                     Err(e) => return Err(e),
                 }
                 write_now.clear();
@@ -298,8 +318,7 @@ impl Link {
                 Err(e) if e.kind() == io::ErrorKind::TimedOut => {}
                 Err(e) if is_disconnect(&e) => {
                     if self.exit_on_disconnect && self.slave.is_none() {
-                        self.record()?;
-                        return Ok(());
+                        return self.deliver_in_flight(inbound);
                     }
                     // No host yet (or between hosts): wait for the next one.
                     std::thread::sleep(Duration::from_millis(5));
@@ -310,8 +329,29 @@ impl Link {
         self.record()
     }
 
+    /// The host hung up. What it wrote is still on the wire and reaches the printer (a real
+    /// board gets the bytes after the host has closed the port: an `M112` sent just before
+    /// closing still halts it), so those bytes are delivered and acted on, then recorded.
+    fn deliver_in_flight(&mut self, inbound: VecDeque<(Instant, Vec<u8>)>) -> io::Result<()> {
+        for (_, bytes) in inbound {
+            self.firmware.receive(&bytes);
+        }
+        let now = Instant::now();
+        // Bounded: the queue and the receive ring hold a few commands, not a job.
+        for _ in 0..1024 {
+            if !self.firmware.step(now) {
+                break;
+            }
+        }
+        self.record()
+    }
+
     fn record(&mut self) -> io::Result<()> {
         *self.counts.lock().unwrap_or_else(PoisonError::into_inner) = self.firmware.fault_counts();
+        *self
+            .emergency
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner) = self.firmware.emergency_counts();
         let new = self.firmware.take_executed();
         if new.is_empty() {
             return Ok(());
