@@ -1,7 +1,7 @@
 //! What every subcommand shares: global flags, model loading, progress bars, JSON output.
 
 use std::io::{IsTerminal, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Result, anyhow};
 use clap::Args;
@@ -25,6 +25,25 @@ impl std::error::Error for UsageError {}
 /// A usage error with this message.
 pub fn usage(message: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(UsageError(message.into()))
+}
+
+/// A mesh or G-code file given where a model goes is a mistake in the call (2), said in
+/// words that point to what does take it, not a script syntax error at byte 87.
+fn refuse_non_model(path: &Path) -> Result<()> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let what = if isoforge_mesh::MeshFormat::from_extension(path).is_some() {
+        "a mesh: a model is a .rhai script or a .vm file. `isoforge check` and `isoforge slice` \
+         take meshes; to build on one, write import_stl(\"FILE\") in a script"
+    } else if crate::cmd::check_gcode::GCODE_EXTENSIONS.contains(&ext.as_str()) {
+        "G-code: a model is a .rhai script or a .vm file. `isoforge check` reads G-code and \
+         `isoforge print` prints it"
+    } else {
+        return Ok(());
+    };
+    Err(usage(format!("{}: is {what}", path.display())))
 }
 
 /// Flags every subcommand takes.
@@ -146,6 +165,7 @@ impl ModelArgs {
                 }
             })
             .collect::<Result<Vec<_>>>()?;
+        refuse_non_model(&self.model)?;
         let limits = self.limits()?;
         let bounds = self.bounds.as_deref().map(parse_bounds).transpose()?;
         let model = isoforge_script::load_file_with(&self.model, &params, &limits)

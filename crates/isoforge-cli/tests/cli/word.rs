@@ -166,3 +166,32 @@ fn an_endless_mesh_or_gcode_input_is_cut_off_with_a_clear_error() {
         );
     }
 }
+
+#[test]
+fn a_mesh_or_gcode_where_a_model_goes_says_what_takes_it() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let stl = fixtures().join("meshes/cube_binary.stl");
+    let gcode = fixtures().join("gcode/square-tube.gcode");
+    let png = dir.path().join("x.png");
+    let png = png.to_str().expect("utf-8");
+    for (args, word) in [
+        (vec!["info", stl.to_str().expect("utf-8")], "a mesh"),
+        (
+            vec!["render", stl.to_str().expect("utf-8"), "-o", png],
+            "import_stl",
+        ),
+        (
+            vec!["info", gcode.to_str().expect("utf-8")],
+            "isoforge print",
+        ),
+    ] {
+        let out = isoforge(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(word), "{args:?}: {stderr}");
+        assert!(
+            !stderr.contains("syntax") && !stderr.contains("UTF-8"),
+            "{stderr}"
+        );
+    }
+}
