@@ -21,6 +21,8 @@ pub struct Sim {
     pub proto: Protocol,
     pub fw: Firmware,
     pub now: Instant,
+    /// The simulated clock when the job began.
+    pub start: Instant,
     pub events: Vec<Event>,
     pub sent: Vec<String>,
     to_fw: VecDeque<u8>,
@@ -52,6 +54,7 @@ impl Sim {
             proto: Protocol::new(commands(job), cfg, now),
             fw: Firmware::new(fw),
             now,
+            start: now,
             events: Vec::new(),
             sent: Vec::new(),
             to_fw: VecDeque::new(),

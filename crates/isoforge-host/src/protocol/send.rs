@@ -177,7 +177,7 @@ impl Protocol {
             self.count_sent(&framed);
             if carries == Carries::Probe {
                 self.stats.probes += 1;
-                self.watchdog.probe_sent = Some(now);
+                self.watchdog.probe_out(now);
                 self.event(Event::Probe { line: n.0 });
             }
             self.outputs.push_back(Output::Send(framed));
@@ -285,7 +285,7 @@ impl Protocol {
             // probe's own `ok` was taken for another line's (or lost), and waiting out the
             // whole timeout would stall the job for nothing (it cost 5 s per damaged line on
             // firmwares that print no `ok` after a refusal). Ask again at the quiet pace.
-            Some(sent) if !long_front && self.watchdog.last_progress > sent => silence >= quiet,
+            Some(_) if !long_front && self.watchdog.heard_since_probe => silence >= quiet,
             Some(sent) => now.duration_since(sent) >= limit,
         };
         if !due {
@@ -319,7 +319,7 @@ impl Protocol {
         if pending {
             self.irregular = true;
             self.watchdog.unanswered += 1;
-            self.watchdog.probe_sent = Some(now);
+            self.watchdog.probe_out(now);
             self.step_forward = true;
             self.send_what_fits(now);
         } else {
@@ -336,7 +336,7 @@ impl Protocol {
         self.watchdog.unanswered += 1;
         self.host_queue.push_front(Carries::Probe);
         // Counted from now even if lines that must go first hold it back a while.
-        self.watchdog.probe_sent = Some(now);
+        self.watchdog.probe_out(now);
         self.send_what_fits(now);
     }
 
@@ -344,7 +344,7 @@ impl Protocol {
     pub(super) fn watchdog_deadline(&self) -> Instant {
         let long_front = self.window.front().is_some_and(|f| f.long);
         match self.watchdog.probe_sent {
-            Some(sent) if !long_front && self.watchdog.last_progress > sent => {
+            Some(_) if !long_front && self.watchdog.heard_since_probe => {
                 self.watchdog.last_progress
                     + self
                         .watchdog

@@ -27,8 +27,12 @@ pub(crate) struct Watchdog {
     last_ok: Option<Instant>,
     /// The usual gap between `ok`s, seconds.
     gap: Option<f64>,
-    /// When the outstanding probe went out.
+    /// When the outstanding probe went out (set with [`Watchdog::probe_out`]).
     pub probe_sent: Option<Instant>,
+    /// The printer said something since the outstanding probe went out. Kept as a flag, not
+    /// read off the clock: a reply read in the same instant the probe was written (one loop
+    /// of the streamer) is later than it, and comparing times would call it earlier.
+    pub heard_since_probe: bool,
     /// Probes in a row with no sign of life in between.
     pub unanswered: u32,
     /// Something suggests an `ok` was lost or damaged: probe at the floor.
@@ -42,6 +46,7 @@ impl Watchdog {
             last_ok: None,
             gap: None,
             probe_sent: None,
+            heard_since_probe: false,
             unanswered: 0,
             suspect: false,
         }
@@ -65,6 +70,14 @@ impl Watchdog {
     pub fn alive(&mut self, now: Instant) {
         self.last_progress = now;
         self.unanswered = 0;
+        self.heard_since_probe = true;
+    }
+
+    /// A probe (a numbered `M105`, or a line sent to find out where the printer stands) has
+    /// just gone out.
+    pub fn probe_out(&mut self, now: Instant) {
+        self.probe_sent = Some(now);
+        self.heard_since_probe = false;
     }
 
     /// The probe was answered (its line acknowledged).

@@ -251,3 +251,27 @@ fn every_fault_at_once_does_not_stall_on_timeouts() {
         "{took:?} simulated"
     );
 }
+
+#[test]
+fn a_reply_in_the_instant_a_probe_goes_out_counts_as_after_it() {
+    // Every fault at once, Marlin, seed 0: after a resend the host steps forward with a line
+    // as its probe, and the printer's `ok` is read in the same instant (one loop of the
+    // streamer). Compared by the clock it looked earlier than the probe, so the host waited
+    // out the whole 5 s timeout: 6.5 s of simulated time for the job. Heard as after the
+    // probe, the host asks again at the printer's pace.
+    let faults =
+        Faults::parse("corrupt=0.01,drop=0.005,error=0.005,drop-ok=0.005,busy=0.01,seed=0")
+            .expect("spec");
+    let sim = run_clean("every fault", Dialect::Marlin, faults, 3, 1000);
+    let events = sim
+        .events
+        .iter()
+        .filter(|e| matches!(e, Event::Probe { .. }))
+        .count();
+    assert!(events > 0, "the faults made the host probe");
+    let elapsed = sim.now.duration_since(sim.start);
+    assert!(
+        elapsed < std::time::Duration::from_secs(3),
+        "simulated time {elapsed:?}: a probe's answer was waited out"
+    );
+}
