@@ -324,18 +324,19 @@ impl ThickSurface {
     }
 }
 
-/// The signed distance from `away` (a point less its foot) to the walls that cut a flat
-/// slab at the surface's border, each taken to first order from the foot: the plane
-/// through the border line the tangent plane extrapolates to (`(1 − s)·∂S/∂s` away for
-/// the side s = 1), standing along the normal. Negative inside all four, and the largest
-/// of the four; the gradient when the foot lies on the side that gives it.
+/// How far `away` (a point less its foot) lies beyond the walls that cut a flat slab at
+/// the surface's four sides, each wall taken to first order from the foot: the plane
+/// through the side's line that the tangent plane extrapolates to (`(1 − s)·∂S/∂s` away
+/// for the side s = 1), standing along the normal. The largest of the four signed
+/// distances (negative when inside all of them), with its gradient when the foot lies on
+/// that side.
 ///
 /// A foot on the side s = 1 gives `away · ĉ`, the distance across the border (ĉ the
-/// border's outward conormal), positive for every point beyond it. A foot a hair inside
-/// gives nearly the same, since it is taken in the same plane: a search that stops a little
-/// short of the border (at s = 1 − 10⁻⁷, with the point well beyond) still reads outside.
-/// Reading only the first-order distance to the edge, as inside the surface, it read
-/// `−(1 − s)·|∂S/∂s|`, barely negative, and made a sliver of stray samples inside.
+/// border's outward conormal), positive for every point beyond it. A foot a hair short of
+/// the border gives nearly the same, since it is measured in the same plane, so a search
+/// that stops at s = 1 − 10⁻⁷ with the point well beyond still reads outside. The first-order
+/// distance to the edge alone, as on pieces clear of the border, reads `−(1 − s)·|∂S/∂s|`
+/// there: barely negative, which made a sliver of stray samples inside.
 fn wall(foot: &Foot, away: DVec3) -> (f64, Option<DVec3>) {
     // The outward conormals of the sides s = 1 and t = 1 (the others are their
     // opposites): each side's tangent direction's complement within the tangent plane.
