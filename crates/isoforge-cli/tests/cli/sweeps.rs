@@ -102,6 +102,29 @@ fn admesh_finds_nothing_to_fix_in_sweep_meshes() {
     }
 }
 
+/// The lecture's Bezier sheet at depth 8, where it once came out in two parts: a sliver of
+/// 44 triangles stood apart beyond the patch's s = 1 border (samples the closest-point
+/// search read as barely inside). Our checker and admesh both count one part now.
+#[test]
+fn the_lecture_bezier_sheet_is_one_part_at_depth_8() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = fixtures().join("sweeps/lecture_bezier.rhai");
+    let out = dir.path().join("bezier-8.stl");
+    mesh_ok(&model, &out, &["--depth", "8"]);
+    let run = isoforge(&["check", s(&out), "--json"]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&run.stdout).expect("--json prints one JSON object");
+    assert_eq!(report["components"], 1, "{report}");
+    let figures = admesh_figures(&out);
+    assert_eq!(figure(&figures, "Number of parts"), 1.0);
+    assert_eq!(figure(&figures, "Edges fixed"), 0.0);
+}
+
 #[test]
 fn a_knurled_knob_slices_to_checked_gcode() {
     let dir = tempfile::tempdir().expect("tempdir");

@@ -229,3 +229,72 @@ fn batched_values_match_single_points() {
         }
     }
 }
+
+/// The mesher samples a block's 17³ corners in one batch call, x fastest, and the batch
+/// carries each point's foot over to the next as a warm start. Along the border those
+/// warm starts must land on the same feet as a fresh search: they once stopped a hair
+/// short of the border (s = 1 − 10⁻⁷, or 5·10⁻⁴ of a piece after a jump to a new row),
+/// read that as barely inside, and left loose slivers beyond the s = 0 and s = 1 borders
+/// of `fixtures/sweeps/lecture_bezier.rhai` at depths 8 and 9.
+#[test]
+fn batched_blocks_along_the_border_match_single_points() {
+    let s = bezier(&lecture_net()).unwrap();
+    let f = ThickSurface::new(&s, 0.3, Edges::Flat);
+    // The fixture's region, [-0.5, 3.5]² × [-0.5, 2.5], as the mesher's grid.
+    let origin = DVec3::splat(-0.5);
+    let (mut points, mut worst) = (0, 0.0f64);
+    for depth in [8, 9] {
+        let cell = 4.0 / f64::from(1u32 << depth);
+        let block = 16.0 * cell;
+        // Every block within half the thickness of the border.
+        let mut blocks = std::collections::BTreeSet::new();
+        for k in 0..=200 {
+            let u = f64::from(k) / 200.0;
+            for (a, b) in [(u, 0.0), (u, 1.0), (0.0, u), (1.0, u)] {
+                let q = s.point(a, b);
+                for o in 0..9 {
+                    // The point and the corners of a cube around it.
+                    let off = if o == 8 {
+                        DVec3::ZERO
+                    } else {
+                        DVec3::new(
+                            f64::from(o & 1) * 2.0 - 1.0,
+                            f64::from(o >> 1 & 1) * 2.0 - 1.0,
+                            f64::from(o >> 2) * 2.0 - 1.0,
+                        ) * 0.15
+                    };
+                    let c = ((q + off - origin) / block).floor();
+                    blocks.insert([c.x as i64, c.y as i64, c.z as i64]);
+                }
+            }
+        }
+        for b in blocks {
+            let (mut xs, mut ys, mut zs) = (Vec::new(), Vec::new(), Vec::new());
+            for k in 0..17 {
+                for j in 0..17 {
+                    for i in 0..17 {
+                        xs.push(origin.x + (b[0] * 16 + i) as f64 * cell);
+                        ys.push(origin.y + (b[1] * 16 + j) as f64 * cell);
+                        zs.push(origin.z + (b[2] * 16 + k) as f64 * cell);
+                    }
+                }
+            }
+            let mut out = vec![0.0; xs.len()];
+            f.values(&xs, &ys, &zs, &mut out);
+            for q in 0..out.len() {
+                let one = f.value([xs[q], ys[q], zs[q]]);
+                worst = worst.max((out[q] - one).abs());
+                assert!(
+                    (out[q] - one).abs() < 1e-6,
+                    "depth {depth}, block {b:?}, ({}, {}, {}): batch {} vs single {one}",
+                    xs[q],
+                    ys[q],
+                    zs[q],
+                    out[q]
+                );
+                points += 1;
+            }
+        }
+    }
+    println!("{points} points, batch and single apart by at most {worst:.1e}");
+}

@@ -297,30 +297,22 @@ impl ThickSurface {
         let w = away.dot(normal);
         let slab = w.abs() - self.half;
         let slab_grad = normal * w.signum();
-        const EDGE: f64 = 1e-9;
-        let on_edge =
-            foot.s <= EDGE || foot.s >= 1.0 - EDGE || foot.t <= EDGE || foot.t >= 1.0 - EDGE;
-        let (flat, flat_grad) = if on_edge {
-            // Beyond the boundary: how far, across the surface.
-            let lateral = away - normal * w;
-            let l = lateral.length();
-            if slab >= l {
-                (slab, Some(slab_grad))
-            } else {
-                (l, Some(lateral / l))
-            }
-        } else {
-            // Inside the boundary: how far to the nearest edge, to first order.
+        let (wall, wall_grad) = if self.edge_room[foot.piece].is_some() {
+            // A piece clear of the edge: how far to the nearest edge, to first order
+            // (what `edge_room` bounds from below for the intervals).
             let (ls, lt) = (foot.ds.length(), foot.dt.length());
             let to_edge = (foot.s * ls)
                 .min((1.0 - foot.s) * ls)
                 .min(foot.t * lt)
                 .min((1.0 - foot.t) * lt);
-            if slab >= -to_edge {
-                (slab, Some(slab_grad))
-            } else {
-                (-to_edge, None)
-            }
+            (-to_edge, None)
+        } else {
+            wall(foot, away)
+        };
+        let (flat, flat_grad) = if slab >= wall {
+            (slab, Some(slab_grad))
+        } else {
+            (wall, wall_grad)
         };
         // The flat slab lies within the round one; keeping the larger value keeps the
         // round one's lower bounds valid for intervals.
@@ -330,6 +322,47 @@ impl ThickSurface {
             (flat, flat_grad)
         }
     }
+}
+
+/// How far `away` (a point less its foot) lies beyond the walls that cut a flat slab at
+/// the surface's four sides, each wall taken to first order from the foot: the plane
+/// through the side's line that the tangent plane extrapolates to (`(1 − s)·∂S/∂s` away
+/// for the side s = 1), standing along the normal. The largest of the four signed
+/// distances (negative when inside all of them), with its gradient when the foot lies on
+/// that side.
+///
+/// A foot on the side s = 1 gives `away · ĉ`, the distance across the border (ĉ the
+/// border's outward conormal), positive for every point beyond it. A foot a hair short of
+/// the border gives nearly the same, since it is measured in the same plane, so a search
+/// that stops at s = 1 − 10⁻⁷ with the point well beyond still reads outside. The first-order
+/// distance to the edge alone, as on pieces clear of the border, reads `−(1 − s)·|∂S/∂s|`
+/// there: barely negative, which made a sliver of stray samples inside.
+fn wall(foot: &Foot, away: DVec3) -> (f64, Option<DVec3>) {
+    // The outward conormals of the sides s = 1 and t = 1 (the others are their
+    // opposites): each side's tangent direction's complement within the tangent plane.
+    let across = |along: DVec3, side: DVec3| {
+        let c = along - side * (along.dot(side) / side.length_squared().max(f64::MIN_POSITIVE));
+        c.try_normalize()
+            .map(|dir| (dir, c.length()))
+            .or_else(|| along.try_normalize().map(|dir| (dir, along.length())))
+    };
+    let mut best = (f64::NEG_INFINITY, None);
+    for (conormal, at) in [
+        (across(foot.ds, foot.dt), foot.s),
+        (across(foot.dt, foot.ds), foot.t),
+    ] {
+        // A degenerate patch (both tangents zero here): no direction to cut along.
+        let Some((dir, speed)) = conormal else {
+            return (0.0, None);
+        };
+        for (outward, room) in [(dir, 1.0 - at), (-dir, at)] {
+            let d = away.dot(outward) - room * speed;
+            if d > best.0 {
+                best = (d, (room == 0.0).then_some(outward));
+            }
+        }
+    }
+    best
 }
 
 /// A lower bound of the first-order distance to the surface's edge, `min(s, 1 − s)·|∂S/∂s|`
@@ -373,6 +406,103 @@ fn edge_room(piece: &Patch) -> Option<f64> {
             .min(t0 * vt)
             .min((1.0 - t1) * vt),
     )
+}
+
+/// Where a Newton step that would leave the piece across a side goes instead: the
+/// coordinate that reaches its bound first along the step is put exactly on it, and the
+/// other takes the step that minimises the quadratic model with the first held there.
+/// Without it a foot just inside an edge, u = 1 − 10⁻⁷ or 5·10⁻⁴ say, may never move:
+/// the coupled 2D step is aimed at a point beyond the edge, and cut off there its other
+/// coordinate can point uphill, so every halving fails and the search stops short of
+/// the foot on the edge (on the lecture's patch that left rows of samples barely inside
+/// the slab beyond its borders, meshed as loose slivers). `None` if the step stays inside.
+fn projected(uv: DVec2, step: DVec2, h: DMat2, g: DVec2) -> Option<Step> {
+    // The fraction of the step at which a coordinate reaches a bound, and that bound.
+    let reach = |x: f64, dx: f64| {
+        let to = x + dx;
+        if to < 0.0 {
+            Some((x / -dx, 0.0))
+        } else if to > 1.0 {
+            Some(((1.0 - x) / dx, 1.0))
+        } else {
+            None
+        }
+    };
+    let (hxx, hxy, hyy) = (h.x_axis.x, h.x_axis.y, h.y_axis.y);
+    let (on_u, on_v) = (reach(uv.x, step.x), reach(uv.y, step.y));
+    let hold_u = match (on_u, on_v) {
+        (None, None) => return None,
+        (Some(_), None) => true,
+        (None, Some(_)) => false,
+        (Some((fu, _)), Some((fv, _))) => fu <= fv,
+    };
+    Some(if hold_u {
+        let bound = on_u?.1;
+        let du = bound - uv.x;
+        Step::OnSide {
+            held: 0,
+            bound,
+            free: if hyy > 0.0 {
+                -(g.y + hxy * du) / hyy
+            } else {
+                0.0
+            },
+        }
+    } else {
+        let bound = on_v?.1;
+        let dv = bound - uv.y;
+        Step::OnSide {
+            held: 1,
+            bound,
+            free: if hxx > 0.0 {
+                -(g.x + hxy * dv) / hxx
+            } else {
+                0.0
+            },
+        }
+    })
+}
+
+/// A move in a piece's (u, v).
+enum Step {
+    /// One coordinate (`held`: 0 for u, 1 for v) put on a bound of the piece, the other
+    /// moved by `free`.
+    OnSide { held: usize, bound: f64, free: f64 },
+    /// Both moved, and cut off at the piece's sides.
+    Free(DVec2),
+}
+
+/// The first of the step's full length, a half, ... a 32nd (kept inside the piece) that
+/// brings the piece no farther from `p` than `here` (squared), with the jet there. A
+/// projected step keeps its held coordinate on the bound and shortens the other one's.
+/// After a few halvings the step is too small to matter: 1/32 of a Newton step near the
+/// foot is below its error.
+fn descend(
+    piece: &Patch,
+    p: DVec3,
+    uv: DVec2,
+    step: &Step,
+    here: f64,
+) -> Option<(DVec2, super::patch::Jet)> {
+    let mut scale = 1.0;
+    for _ in 0..6 {
+        let next = match *step {
+            Step::OnSide {
+                held: 0,
+                bound,
+                free,
+            } => DVec2::new(bound, uv.y + free * scale),
+            Step::OnSide { bound, free, .. } => DVec2::new(uv.x + free * scale, bound),
+            Step::Free(step) => uv + step * scale,
+        }
+        .clamp(DVec2::ZERO, DVec2::ONE);
+        let next_jet = piece.jet(next.x, next.y);
+        if next_jet.p.distance_squared(p) <= here {
+            return Some((next, next_jet));
+        }
+        scale *= 0.5;
+    }
+    None
 }
 
 /// The closest point of one piece to `p`: Newton on |S − p|² from the best of its centre
@@ -430,21 +560,13 @@ fn closest_on(piece: &Patch, index: usize, p: DVec3, start: Option<DVec2>) -> Fo
             (true, false) if h.y_axis.y > 0.0 => DVec2::new(0.0, -g.y / h.y_axis.y),
             _ => break,
         };
-        // Backtrack until the distance drops: a few halvings, then the step is too small
-        // to matter (1/32 of a Newton step near the foot is below its error).
+        // Backtrack until the distance drops: first along the step projected onto the
+        // piece, then along the step cut off at the piece's sides.
         let here = jet.p.distance_squared(p);
-        let mut scale = 1.0;
-        let mut found = None;
-        for _ in 0..6 {
-            let next = (uv + step * scale).clamp(DVec2::ZERO, DVec2::ONE);
-            let next_jet = piece.jet(next.x, next.y);
-            if next_jet.p.distance_squared(p) <= here {
-                found = Some((next, next_jet));
-                break;
-            }
-            scale *= 0.5;
-        }
-        let Some((next, next_jet)) = found else {
+        let Some((next, next_jet)) = projected(uv, step, h, g)
+            .and_then(|onto| descend(piece, p, uv, &onto, here))
+            .or_else(|| descend(piece, p, uv, &Step::Free(step), here))
+        else {
             break;
         };
         let moved = (next - uv).length();
@@ -539,5 +661,47 @@ impl CustomField for ThickSurface {
         let h = 1e-7 * (1.0 + p.abs().max_element());
         let d = |e: DVec3| (self.field(p + e * h) - self.field(p - e * h)) / (2.0 * h);
         [v, d(DVec3::X), d(DVec3::Y), d(DVec3::Z)]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A point just beyond the border reads outside from its foot on the border, and as
+    /// much from a foot a search left a hair short of it (the old reading there was the
+    /// first-order distance to the edge, −10⁻⁷ × |∂S/∂s|: inside).
+    #[test]
+    fn a_foot_a_hair_short_of_the_border_still_reads_outside() {
+        let net: Vec<Vec<[f64; 3]>> = (0..3)
+            .map(|i| {
+                (0..3)
+                    .map(|j| [i as f64, j as f64, [0.0, 0.8, 0.2][i] + [0.3, 0.0, 0.5][j]])
+                    .collect()
+            })
+            .collect();
+        let s = crate::surface::bezier(&net).unwrap();
+        let f = ThickSurface::new(&s, 0.3, Edges::Flat);
+        let at = s.point(1.0, 0.4);
+        let out = (at - s.point(1.0 - 1e-6, 0.4)).normalize();
+        for (beyond, below) in [(0.05, 0.0), (0.02, 0.1), (0.1, -0.05)] {
+            let h = 1e-6;
+            let normal = (s.point(1.0, 0.4 + h) - s.point(1.0, 0.4 - h))
+                .cross(out)
+                .normalize();
+            let p = at + out * beyond + normal * below;
+            let foot = f.closest(p).unwrap();
+            assert_eq!(foot.s, 1.0, "{beyond}, {below}");
+            let exact = f.at_foot(p, &foot).0;
+            assert!(exact > 0.5 * beyond, "{beyond}, {below}: {exact}");
+            let mut short = foot;
+            short.s = 1.0 - 1e-7;
+            short.point -= foot.ds * 1e-7;
+            let v = f.at_foot(p, &short).0;
+            assert!(
+                (v - exact).abs() < 1e-5,
+                "{beyond}, {below}: {v} vs {exact}"
+            );
+        }
     }
 }
