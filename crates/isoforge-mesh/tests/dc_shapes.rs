@@ -363,10 +363,7 @@ fn turned_cube_vertices_are_on_its_faces_measured_exactly() {
         .iter()
         .map(|v| frame(v.map(f64::from)))
         .collect();
-    let worst = local
-        .iter()
-        .map(|&q| box_distance(q))
-        .fold(0.0, f64::max);
+    let worst = local.iter().map(|&q| box_distance(q)).fold(0.0, f64::max);
     assert!(worst <= 0.05 * cell, "a vertex {} cell off", worst / cell);
     for corner in 0..8 {
         let c = [0, 1, 2].map(|a| if corner >> a & 1 == 1 { 1.0 } else { -1.0 });
@@ -374,6 +371,34 @@ fn turned_cube_vertices_are_on_its_faces_measured_exactly() {
             .iter()
             .map(|q| (0..3).map(|a| (q[a] - c[a]).powi(2)).sum::<f64>().sqrt())
             .fold(f64::INFINITY, f64::min);
-        assert!(nearest <= 0.1 * cell, "corner {c:?}: {} cell", nearest / cell);
+        assert!(
+            nearest <= 0.1 * cell,
+            "corner {c:?}: {} cell",
+            nearest / cell
+        );
+    }
+}
+
+#[test]
+fn turned_cube_is_a_few_triangles_at_every_depth() {
+    // A box turned off the lattice: its edges block the octree merge (a leaf edge there
+    // would hold two crossings), and the field-checked collapses take the triangles along
+    // them away. Depth 9 was 16,224 triangles before them.
+    let (shape, frame) = turned_cube();
+    for depth in [6, 9] {
+        let settings = MeshSettings::new(cube(-1.8, 1.8), depth);
+        let (mesh, volume) = mesh_ok_with(&shape, &settings, "turned cube");
+        assert!(
+            mesh.triangles.len() < 2000,
+            "depth {depth}: {} triangles",
+            mesh.triangles.len()
+        );
+        assert!((volume - 8.0).abs() < 0.01, "depth {depth}: volume {volume}");
+        // Every vertex on the cube: collapses keep vertices where dual contouring put them.
+        let cell = 3.6 / f64::from(1u32 << depth);
+        for v in &mesh.vertices {
+            let d = box_distance(frame(v.map(f64::from)));
+            assert!(d <= 0.3 * cell, "depth {depth}: a vertex {} cell off", d / cell);
+        }
     }
 }

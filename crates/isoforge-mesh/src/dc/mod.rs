@@ -23,6 +23,7 @@
 
 pub mod cell;
 pub mod contour;
+pub mod decimate;
 pub mod hermite;
 pub mod leaf;
 pub mod merge;

@@ -1,0 +1,634 @@
+//! Edge collapses on the streamed mesh, checked against the field: what the octree merge
+//! cannot do along sharp edges that run across the lattice.
+//!
+//! A leaf has one vertex, so a leaf edge may hold one crossing (`topology.rs`). Along a
+//! cube's edge turned off the lattice, lattice lines enter and leave the solid within a
+//! cell or two, and no leaf there grows past a few cells: the turned cube (fixtures/flat)
+//! was 16,224 triangles at depth 9, nearly all of them along its 12 edges. Here those
+//! triangles are collapsed away, as in Garland and Heckbert's simplification (1997) with
+//! half-edge collapses (a vertex moves onto a neighbour that stays where dual contouring
+//! put it, so vertices on creases and corners stay there):
+//!
+//! * a collapse `b → a` is tried only when both fans are complete (every triangle around
+//!   `a` and `b` has come) and neither vertex has been written out;
+//! * the link condition (the vertices next to both `a` and `b` are exactly the two
+//!   opposite the edge) keeps the mesh a closed 2-manifold (Dey et al. 1999); no triangle
+//!   may turn over or become a sliver;
+//! * the tolerance: `a` within the tolerance of every plane the removed triangles had,
+//!   summed (the quadric, a sum of squared distances, so it only grows), and sample points
+//!   on every new triangle within the tolerance of the surface by the field (|F| / |∇F|,
+//!   exact inside a convex crease, where chords run).
+//!
+//! Memory stays bounded: triangles are held until [`CHUNK`] of them have come, then
+//! collapsed and written; vertices whose fans are still open (the seam with triangles to
+//! come) are written too and kept, frozen, for the next chunk.
+
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, HashMap};
+use std::io;
+
+use glam::DVec3;
+
+use super::sampler::Sampler;
+use crate::sink::MeshSink;
+
+/// Triangles held before a round of collapses. 2^17 triangles cost about 12 MiB of
+/// working structures; every bench model at depth 8 and the box-like fixtures at depth 9
+/// fit in one chunk, so they see no seam.
+pub const CHUNK: usize = 1 << 16;
+
+/// A new triangle's normal may turn at most this far from the one it replaces (cosine)
+/// without the field's say (see `can_collapse`).
+const MIN_TURN_COS: f64 = 0.5;
+
+/// Rounds of collapses at most. On the turned cube a second round finds a few more; a
+/// third none.
+const ROUNDS: usize = 3;
+
+/// Away from creases, a collapse is tried only where the quadric's mean distance is
+/// below this share of the tolerance: the octree merge has already made smooth parts as
+/// coarse as the tolerance allows, and trying them all cost the gyroid sphere at depth 9
+/// a third more time for 15 % fewer triangles.
+const FLAT_SHARE: f64 = 0.1;
+
+/// Two normals around a vertex that differ by more than this (cosine, 84°) make it a
+/// crease or corner vertex. At 0.3 and 0.8 DC's small triangles on the gyroid counted as
+/// creases too, and the collapses there took twice the time.
+const CREASE_COS: f64 = 0.1;
+
+/// Triangles lower than this fraction of their longest side are slivers.
+const SLIVER: f64 = 0.05;
+
+/// Sample points on a new triangle, in barycentric coordinates: the edge middles and the
+/// centre (its corners are vertices, placed on the surface already).
+const SAMPLES: [[f64; 3]; 4] = [
+    [0.5, 0.5, 0.0],
+    [0.0, 0.5, 0.5],
+    [0.5, 0.0, 0.5],
+    [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
+];
+
+/// A vertex written out whose fan is still open.
+#[derive(Clone, Debug)]
+struct Frozen {
+    out: u32,
+    pos: [f32; 3],
+    /// Per neighbour, how often it starts minus ends an edge of the fan's rim so far.
+    rim: Vec<(u32, i32)>,
+}
+
+/// Sums of squared distances to planes, around an origin: `xᵀ A x − 2 bᵀ x + c`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Quadric {
+    a: [f64; 6],
+    b: DVec3,
+    c: f64,
+    /// The weights summed.
+    n: f64,
+}
+
+impl Quadric {
+    /// The plane through `p` with unit normal `n`, of weight `w`.
+    fn plane(n: DVec3, p: DVec3, w: f64) -> Self {
+        let d = n.dot(p);
+        let m = n * w;
+        Quadric {
+            a: [
+                m.x * n.x,
+                m.x * n.y,
+                m.x * n.z,
+                m.y * n.y,
+                m.y * n.z,
+                m.z * n.z,
+            ],
+            b: m * d,
+            c: w * d * d,
+            n: w,
+        }
+    }
+    fn add(&mut self, o: &Quadric) {
+        for (s, t) in self.a.iter_mut().zip(o.a) {
+            *s += t;
+        }
+        self.b += o.b;
+        self.c += o.c;
+        self.n += o.n;
+    }
+    fn at(&self, x: DVec3) -> f64 {
+        let a = &self.a;
+        let ax = DVec3::new(
+            a[0] * x.x + a[1] * x.y + a[2] * x.z,
+            a[1] * x.x + a[3] * x.y + a[4] * x.z,
+            a[2] * x.x + a[4] * x.y + a[5] * x.z,
+        );
+        (x.dot(ax) - 2.0 * self.b.dot(x) + self.c).max(0.0)
+    }
+    /// The weighted mean squared distance at `x`.
+    fn mean_at(&self, x: DVec3) -> f64 {
+        if self.n > 0.0 {
+            self.at(x) / self.n
+        } else {
+            0.0
+        }
+    }
+}
+
+/// A sink that collapses what the tolerance allows before passing the mesh on.
+pub struct Decimator<'a, S: Sampler> {
+    sampler: &'a S,
+    ev: S::Evals,
+    root: S::Local,
+    tolerance: f64,
+    inner: &'a mut dyn MeshSink,
+    /// Input index of the chunk's first vertex.
+    base: u32,
+    /// The chunk's vertices, from `base` on.
+    verts: Vec<[f32; 3]>,
+    /// The chunk's triangles, in input indices.
+    tris: Vec<[u32; 3]>,
+    /// Written vertices with open fans, by input index.
+    frozen: HashMap<u32, Frozen>,
+    /// Output vertices so far.
+    written: u32,
+    /// Input vertices so far.
+    seen: u32,
+}
+
+impl<'a, S: Sampler> Decimator<'a, S> {
+    /// Collapses within `tolerance` (model units) on the way to `inner`.
+    pub fn new(sampler: &'a S, tolerance: f64, inner: &'a mut dyn MeshSink) -> Self {
+        Decimator {
+            sampler,
+            ev: sampler.evals(),
+            root: sampler.root(),
+            tolerance,
+            inner,
+            base: 0,
+            verts: Vec::new(),
+            tris: Vec::new(),
+            frozen: HashMap::new(),
+            written: 0,
+            seen: 0,
+        }
+    }
+
+    /// Collapses and writes what is held; call once the mesher is done.
+    pub fn finish(&mut self) -> io::Result<()> {
+        self.flush()
+    }
+
+    /// One round: collapse, write, keep the open fans' vertices frozen.
+    fn flush(&mut self) -> io::Result<()> {
+        let mut chunk = Chunk::new(self)?;
+        chunk.collapse(self);
+        chunk.write(self)
+    }
+}
+
+impl<S: Sampler> MeshSink for Decimator<'_, S> {
+    fn vertex(&mut self, p: [f32; 3]) -> io::Result<()> {
+        self.verts.push(p);
+        self.seen += 1;
+        Ok(())
+    }
+
+    fn triangle(&mut self, t: [u32; 3], _corners: [[f32; 3]; 3]) -> io::Result<()> {
+        self.tris.push(t);
+        if self.tris.len() >= CHUNK {
+            self.flush()?;
+        }
+        Ok(())
+    }
+}
+
+/// The working structures of one round, in chunk-local vertex indices: the chunk's own
+/// vertices first, then the frozen ones its triangles use.
+struct Chunk {
+    pos: Vec<DVec3>,
+    /// Input index of each local vertex.
+    input: Vec<u32>,
+    /// Fan complete (and not frozen): may take part in a collapse.
+    free: Vec<bool>,
+    /// On a crease or corner: the normals around it spread wide.
+    crease: Vec<bool>,
+    alive_v: Vec<bool>,
+    quadric: Vec<Quadric>,
+    /// Triangles around each vertex (indices into `tris`; dead ones filtered when read).
+    around: Vec<Vec<u32>>,
+    tris: Vec<[u32; 3]>,
+    alive_t: Vec<bool>,
+    /// Each triangle's distance from the surface at its sample points, once measured
+    /// (NaN until then).
+    dev: Vec<f64>,
+    /// Around this point the quadrics are summed (precision).
+    origin: DVec3,
+}
+
+impl Chunk {
+    fn new<S: Sampler>(d: &mut Decimator<'_, S>) -> io::Result<Self> {
+        let n = d.verts.len();
+        let mut input: Vec<u32> = (0..n as u32).map(|i| d.base + i).collect();
+        let mut pos: Vec<DVec3> = d.verts.iter().map(|&p| to_d(p)).collect();
+        let mut frozen = vec![false; n];
+        let mut local_of_frozen: HashMap<u32, u32> = HashMap::new();
+        let tris_in = std::mem::take(&mut d.tris);
+        let mut tris = Vec::with_capacity(tris_in.len());
+        for t in tris_in {
+            let mut lt = [0u32; 3];
+            for (l, &v) in lt.iter_mut().zip(&t) {
+                *l = if v >= d.base {
+                    v - d.base
+                } else if let Some(&l) = local_of_frozen.get(&v) {
+                    l
+                } else {
+                    // Earlier vertices are either frozen or had complete fans.
+                    let f = d.frozen.get(&v).ok_or_else(|| {
+                        io::Error::other("internal error: a triangle of a finished vertex")
+                    })?;
+                    input.push(v);
+                    pos.push(to_d(f.pos));
+                    frozen.push(true);
+                    local_of_frozen.insert(v, (input.len() - 1) as u32);
+                    (input.len() - 1) as u32
+                };
+            }
+            tris.push(lt);
+        }
+        let m = pos.len();
+        let origin = pos.first().copied().unwrap_or(DVec3::ZERO);
+        let mut around = vec![Vec::new(); m];
+        let mut quadric = vec![Quadric::default(); m];
+        let mut rim: Vec<Vec<(u32, i32)>> = vec![Vec::new(); m];
+        for (i, t) in tris.iter().enumerate() {
+            let [p, q, r] = t.map(|v| pos[v as usize] - origin);
+            let n = (q - p).cross(r - p);
+            // Weighted by area: a sliver's plane says little about the surface.
+            let plane = if n.length_squared() > 0.0 {
+                Quadric::plane(n.normalize(), p, n.length() / 2.0)
+            } else {
+                Quadric::default()
+            };
+            for k in 0..3 {
+                let v = t[k] as usize;
+                around[v].push(i as u32);
+                quadric[v].add(&plane);
+                tally(&mut rim[v], t[(k + 1) % 3], 1);
+                tally(&mut rim[v], t[(k + 2) % 3], -1);
+            }
+        }
+        let free = (0..m)
+            .map(|v| !frozen[v] && !around[v].is_empty() && rim[v].iter().all(|e| e.1 == 0))
+            .collect();
+        let crease = (0..m)
+            .map(|v| {
+                let normals: Vec<DVec3> = around[v]
+                    .iter()
+                    .map(|&t| tris[t as usize].map(|w| pos[w as usize]))
+                    .filter(|t| !sliver(t))
+                    .map(|t| (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero())
+                    .collect();
+                normals
+                    .iter()
+                    .enumerate()
+                    .any(|(i, n)| normals[i + 1..].iter().any(|o| n.dot(*o) < CREASE_COS))
+            })
+            .collect();
+        Ok(Chunk {
+            crease,
+            alive_v: vec![true; m],
+            alive_t: vec![true; tris.len()],
+            dev: vec![f64::NAN; tris.len()],
+            pos,
+            input,
+            free,
+            quadric,
+            around,
+            tris,
+            origin,
+        })
+    }
+
+    /// The live triangles around `v`.
+    fn fan(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
+        self.around[v as usize]
+            .iter()
+            .copied()
+            .filter(|&t| self.alive_t[t as usize])
+    }
+
+    /// The vertices next to `v`, sorted.
+    fn neighbours(&self, v: u32) -> Vec<u32> {
+        let mut out: Vec<u32> = self
+            .fan(v)
+            .flat_map(|t| self.tris[t as usize])
+            .filter(|&w| w != v)
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    fn cost(&self, b: u32, a: u32) -> f64 {
+        let mut q = self.quadric[a as usize];
+        q.add(&self.quadric[b as usize]);
+        q.mean_at(self.pos[a as usize] - self.origin)
+    }
+
+    /// Greedy collapses, cheapest first, in rounds until a round finds none (a collapse
+    /// can unblock one next to it that was refused before).
+    fn collapse<S: Sampler>(&mut self, d: &mut Decimator<'_, S>) {
+        let flat = (d.tolerance * FLAT_SHARE).powi(2);
+        if !(flat > 0.0) {
+            return;
+        }
+        let mut heap = BinaryHeap::new();
+        // Crease vertices are tried whatever their quadric (the triangles cutting the
+        // crease weigh in it); elsewhere only where the surface is flat.
+        let push = |c: &Chunk, heap: &mut BinaryHeap<_>, b: u32, a: u32| {
+            if c.free[b as usize] && c.free[a as usize] {
+                let cost = c.cost(b, a);
+                if c.crease[b as usize] || cost <= flat {
+                    heap.push(Reverse((cost.to_bits(), b, a)));
+                }
+            }
+        };
+        for _ in 0..ROUNDS {
+            let mut done = 0usize;
+            for v in 0..self.pos.len() as u32 {
+                if !self.free[v as usize] || !self.alive_v[v as usize] {
+                    continue;
+                }
+                for w in self.neighbours(v) {
+                    push(self, &mut heap, v, w);
+                }
+            }
+            while let Some(Reverse((bits, b, a))) = heap.pop() {
+                if !(self.alive_v[b as usize] && self.alive_v[a as usize]) {
+                    continue;
+                }
+                // Quadrics only grow: a changed cost goes back in its new place.
+                if self.cost(b, a).to_bits() != bits {
+                    push(self, &mut heap, b, a);
+                    continue;
+                }
+                if !self.can_collapse(d, b, a) {
+                    continue;
+                }
+                self.apply(b, a);
+                done += 1;
+                for w in self.neighbours(a) {
+                    push(self, &mut heap, w, a);
+                    push(self, &mut heap, a, w);
+                }
+            }
+            if done == 0 {
+                break;
+            }
+        }
+    }
+
+    /// True when `b → a` keeps the mesh a closed 2-manifold (the link condition, no
+    /// tetrahedron folded flat), turns no triangle over, and keeps the surface within
+    /// the tolerance by the field.
+    fn can_collapse<S: Sampler>(&mut self, d: &mut Decimator<'_, S>, b: u32, a: u32) -> bool {
+        let (na, nb) = (self.neighbours(a), self.neighbours(b));
+        if nb.binary_search(&a).is_err() {
+            return false;
+        }
+        let shared: Vec<u32> = na
+            .iter()
+            .copied()
+            .filter(|v| nb.binary_search(v).is_ok())
+            .collect();
+        let opposite: Vec<u32> = self
+            .fan(b)
+            .map(|t| self.tris[t as usize])
+            .filter(|t| t.contains(&a))
+            .map(|t| t.iter().copied().find(|&v| v != a && v != b).unwrap_or(a))
+            .collect();
+        if opposite.len() != 2 || shared.len() != 2 || !opposite.iter().all(|v| shared.contains(v))
+        {
+            return false;
+        }
+        // `a` keeps at least three neighbours, or a tetrahedron would fold flat.
+        if na.len() + nb.len() - shared.len() - 2 < 3 {
+            return false;
+        }
+        let pa = self.pos[a as usize];
+        let min_area = (d.tolerance * d.tolerance) * 1e-6;
+        let mut new_tris = Vec::new();
+        for t in self.fan(b) {
+            let tri = self.tris[t as usize];
+            if tri.contains(&a) {
+                continue;
+            }
+            let old = tri.map(|v| self.pos[v as usize]);
+            let new = tri.map(|v| if v == b { pa } else { self.pos[v as usize] });
+            let n_old = (old[1] - old[0]).cross(old[2] - old[0]);
+            let n_new = (new[1] - new[0]).cross(new[2] - new[0]);
+            if n_new.length_squared() <= min_area * min_area {
+                return false;
+            }
+            // Near a crease, dual contouring leaves small triangles across it whose normals
+            // say little (some point along the crease): a new triangle that turns far from
+            // the old one must at least face out, by the field's normal at its centre.
+            let turn = n_new.normalize().dot(n_old.normalize_or_zero());
+            if !(turn >= MIN_TURN_COS || self.faces_out(d, &new, n_new)) {
+                return false;
+            }
+            new_tris.push(new);
+        }
+        if new_tris
+            .iter()
+            .all(|t| self.deviation(d, t, d.tolerance) <= d.tolerance)
+        {
+            return true;
+        }
+        // Where the triangles around a crease already missed the tolerance (dual
+        // contouring cuts creases), the new ones may miss it by as much, never more: the
+        // worst place does not get worse.
+        if !self.crease[b as usize] {
+            return false;
+        }
+        let fan: Vec<u32> = self.fan(b).collect();
+        let mut allowance = d.tolerance;
+        for t in fan {
+            allowance = allowance.max(self.known_deviation(d, t));
+        }
+        allowance > d.tolerance
+            && new_tris
+                .iter()
+                .all(|t| self.deviation(d, t, allowance) <= allowance)
+    }
+
+    /// True when the field's normal at the triangle's centre is on the side of `n`.
+    fn faces_out<S: Sampler>(&self, d: &mut Decimator<'_, S>, t: &[DVec3; 3], n: DVec3) -> bool {
+        let c = (t[0] + t[1] + t[2]) / 3.0;
+        let g = d.sampler.grad(&mut d.ev, &d.root, c.to_array());
+        DVec3::new(g[1], g[2], g[3]).dot(n) > 0.0
+    }
+
+    /// Sample points of a triangle within the tolerance of the surface, by the field.
+    fn deviation<S: Sampler>(&self, d: &mut Decimator<'_, S>, t: &[DVec3; 3], stop: f64) -> f64 {
+        let mut worst = 0.0f64;
+        for w in &SAMPLES {
+            let p = t[0] * w[0] + t[1] * w[1] + t[2] * w[2];
+            let g = d.sampler.grad(&mut d.ev, &d.root, p.to_array());
+            let slope = DVec3::new(g[1], g[2], g[3]).length();
+            let distance = g[0].abs() / slope;
+            if !(distance <= stop) {
+                return f64::INFINITY;
+            }
+            worst = worst.max(distance);
+        }
+        worst
+    }
+
+    /// The largest distance of triangle `t`'s sample points from the surface, measured
+    /// once.
+    fn known_deviation<S: Sampler>(&mut self, d: &mut Decimator<'_, S>, t: u32) -> f64 {
+        let known = self.dev[t as usize];
+        if !known.is_nan() {
+            return known;
+        }
+        let tri = self.tris[t as usize].map(|v| self.pos[v as usize]);
+        let e = self.deviation(d, &tri, f64::MAX);
+        self.dev[t as usize] = e;
+        e
+    }
+
+    fn apply(&mut self, b: u32, a: u32) {
+        let fan: Vec<u32> = self.fan(b).collect();
+        for t in fan {
+            let tri = &mut self.tris[t as usize];
+            if tri.contains(&a) {
+                self.alive_t[t as usize] = false;
+                continue;
+            }
+            for v in tri.iter_mut() {
+                if *v == b {
+                    *v = a;
+                }
+            }
+            self.dev[t as usize] = f64::NAN;
+            self.around[a as usize].push(t);
+        }
+        self.crease[a as usize] |= self.crease[b as usize];
+        let qb = self.quadric[b as usize];
+        self.quadric[a as usize].add(&qb);
+        self.alive_v[b as usize] = false;
+        self.around[b as usize].clear();
+    }
+
+    /// Writes the live triangles and the vertices they use; vertices with open fans stay
+    /// frozen for the next chunk.
+    fn write<S: Sampler>(self, d: &mut Decimator<'_, S>) -> io::Result<()> {
+        let m = self.pos.len();
+        let own = d.verts.len();
+        let mut out = vec![u32::MAX; m];
+        for (v, o) in out.iter_mut().enumerate().skip(own) {
+            if let Some(f) = d.frozen.get(&self.input[v]) {
+                *o = f.out;
+            }
+        }
+        // Rims of the fans as written, to tell which stay open.
+        let mut rim: Vec<Vec<(u32, i32)>> = vec![Vec::new(); m];
+        for (t, tri) in self.tris.iter().enumerate() {
+            if !self.alive_t[t] {
+                continue;
+            }
+            for k in 0..3 {
+                let v = tri[k] as usize;
+                if out[v] == u32::MAX {
+                    out[v] = d.written;
+                    d.written += 1;
+                    d.inner.vertex(d.verts[v])?;
+                }
+                let (p, q) = (
+                    self.input[tri[(k + 1) % 3] as usize],
+                    self.input[tri[(k + 2) % 3] as usize],
+                );
+                tally(&mut rim[v], p, 1);
+                tally(&mut rim[v], q, -1);
+            }
+            let ids = tri.map(|v| out[v as usize]);
+            let corners = tri.map(|v| self.position(d, v as usize));
+            if ids.contains(&u32::MAX) {
+                return Err(io::Error::other("internal error: a vertex never written"));
+            }
+            d.inner.triangle(ids, corners)?;
+        }
+        // Vertices that came but have no triangle yet are open too: their triangles wait
+        // for merges above the blocks.
+        for v in 0..own {
+            if !self.alive_v[v] {
+                continue;
+            }
+            let open = self.around[v].iter().all(|&t| !self.alive_t[t as usize])
+                || rim[v].iter().any(|e| e.1 != 0);
+            if !open {
+                continue;
+            }
+            if out[v] == u32::MAX {
+                out[v] = d.written;
+                d.written += 1;
+                d.inner.vertex(d.verts[v])?;
+            }
+            d.frozen.insert(
+                d.base + v as u32,
+                Frozen {
+                    out: out[v],
+                    pos: d.verts[v],
+                    rim: std::mem::take(&mut rim[v]),
+                },
+            );
+        }
+        for v in own..m {
+            let key = self.input[v];
+            let closed = match d.frozen.get_mut(&key) {
+                Some(f) => {
+                    for &(w, n) in &rim[v] {
+                        tally(&mut f.rim, w, n);
+                    }
+                    f.rim.iter().all(|e| e.1 == 0)
+                }
+                None => false,
+            };
+            if closed {
+                d.frozen.remove(&key);
+            }
+        }
+        d.base = d.seen;
+        d.verts.clear();
+        Ok(())
+    }
+
+    fn position<S: Sampler>(&self, d: &Decimator<'_, S>, v: usize) -> [f32; 3] {
+        match d.verts.get(v) {
+            Some(p) => *p,
+            None => d.frozen.get(&self.input[v]).map_or([0.0; 3], |f| f.pos),
+        }
+    }
+}
+
+/// True when a triangle's height is below [`SLIVER`] of its longest side.
+fn sliver(t: &[DVec3; 3]) -> bool {
+    let longest2 = (0..3)
+        .map(|k| t[k].distance_squared(t[(k + 1) % 3]))
+        .fold(0.0, f64::max);
+    let twice_area = (t[1] - t[0]).cross(t[2] - t[0]).length();
+    // height = 2 area / longest side
+    twice_area * twice_area < SLIVER * SLIVER * longest2 * longest2
+}
+
+fn to_d(p: [f32; 3]) -> DVec3 {
+    DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]))
+}
+
+/// Adds `n` to `w`'s count.
+fn tally(rim: &mut Vec<(u32, i32)>, w: u32, n: i32) {
+    match rim.iter_mut().find(|e| e.0 == w) {
+        Some(e) => e.1 += n,
+        None => rim.push((w, n)),
+    }
+}
