@@ -393,12 +393,19 @@ fn turned_cube_is_a_few_triangles_at_every_depth() {
             "depth {depth}: {} triangles",
             mesh.triangles.len()
         );
-        assert!((volume - 8.0).abs() < 0.01, "depth {depth}: volume {volume}");
+        assert!(
+            (volume - 8.0).abs() < 0.01,
+            "depth {depth}: volume {volume}"
+        );
         // Every vertex on the cube: collapses keep vertices where dual contouring put them.
         let cell = 3.6 / f64::from(1u32 << depth);
         for v in &mesh.vertices {
             let d = box_distance(frame(v.map(f64::from)));
-            assert!(d <= 0.3 * cell, "depth {depth}: a vertex {} cell off", d / cell);
+            assert!(
+                d <= 0.3 * cell,
+                "depth {depth}: a vertex {} cell off",
+                d / cell
+            );
         }
     }
 }
