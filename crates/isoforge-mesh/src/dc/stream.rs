@@ -15,7 +15,7 @@ use std::sync::atomic::Ordering;
 use rayon::prelude::*;
 
 use super::contour::{self, Polygon, Ref};
-use super::decimate::Decimator;
+use super::decimate::{self, Decimator};
 use super::hermite::{self, Crossing, EdgeRef, Scratch};
 use super::leaf::{self, BlockInput, BlockOut, LeafScratch, Merging, NO_VERT};
 use super::merge::{AboveBlocks, Resolved};
@@ -52,7 +52,10 @@ pub fn run<S: Sampler>(
     if !merging.on() {
         return contour_into(sampler, settings, merging, block_shift, sink);
     }
-    let mut decimator = Decimator::new(sampler, settings.effective_tolerance(), sink);
+    let tolerance = settings
+        .effective_tolerance()
+        .min(settings.cell() * decimate::MAX_CELLS);
+    let mut decimator = Decimator::new(sampler, tolerance, sink);
     contour_into(sampler, settings, merging, block_shift, &mut decimator)?;
     decimator.finish().map_err(MeshError::Write)
 }
