@@ -334,12 +334,11 @@ pub fn build<S: Sampler>(
                     Some(axis),
                 );
             }
-            // Two patches' vertices must stay two points.
-            let pick = if placed[0] == placed[1] {
-                middles
-            } else {
-                placed
-            };
+            // Two patches' vertices must stay two points, as written (f32) too: both can
+            // step onto the same stretch of the surface's curve.
+            let apart = placed[0].distance(placed[1]) > grid.cell * INSET
+                && placed[0].as_vec3() != placed[1].as_vec3();
+            let pick = if apart { placed } else { middles };
             for v in pick {
                 out.vertices.push(v.as_vec3().to_array());
             }
