@@ -387,7 +387,7 @@ impl Chunk {
     /// can unblock one next to it that was refused before).
     fn collapse<S: Sampler>(&mut self, d: &mut Decimator<'_, S>) {
         let flat = (d.tolerance * FLAT_SHARE).powi(2);
-        if !(flat > 0.0) {
+        if flat.is_nan() || flat <= 0.0 {
             return;
         }
         let mut heap = BinaryHeap::new();
@@ -498,7 +498,7 @@ impl Chunk {
                 return false;
             }
             let turn = n_new.normalize().dot(n_old.normalize_or_zero());
-            if !(turn >= MIN_TURN_COS) {
+            if turn.is_nan() || turn < MIN_TURN_COS {
                 return false;
             }
             new_tris.push(new);
@@ -546,9 +546,8 @@ impl Chunk {
             let g = d.sampler.grad(&mut d.ev, &d.root, p.to_array());
             let grad = DVec3::new(g[1], g[2], g[3]);
             let distance = g[0].abs() / grad.length();
-            if !(distance <= stop)
-                || facing && !(grad.dot(n) > FACING_COS * grad.length() * n.length())
-            {
+            let faces_out = grad.dot(n) > FACING_COS * grad.length() * n.length();
+            if distance.is_nan() || distance > stop || facing && !faces_out {
                 return f64::INFINITY;
             }
             worst = worst.max(distance);
@@ -657,11 +656,10 @@ impl Chunk {
                 },
             );
         }
-        for v in own..m {
-            let key = self.input[v];
+        for (&key, rim) in self.input.iter().zip(&rim).skip(own) {
             let closed = match d.frozen.get_mut(&key) {
                 Some(f) => {
-                    for &(w, n) in &rim[v] {
+                    for &(w, n) in rim {
                         tally(&mut f.rim, w, n);
                     }
                     f.rim.iter().all(|e| e.1 == 0)

@@ -414,7 +414,8 @@ fn onto_surface<S: Sampler>(
         }
         let next = (x - grad * (f / slope2)).clamp(lo, hi);
         let (nf, ngrad) = field(next);
-        if !next.is_finite() || !(nf.abs() < f.abs()) {
+        let better = nf.abs() < f.abs();
+        if !next.is_finite() || !better {
             break;
         }
         (x, f, grad) = (next, nf, ngrad);
