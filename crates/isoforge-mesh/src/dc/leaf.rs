@@ -30,6 +30,10 @@ pub const CANDIDATE: u32 = u32::MAX - 1;
 /// position, and two of our vertices welded together would break manifoldness.
 const INSET: f64 = 1e-3;
 
+/// Newton steps that move a box-held vertex onto the surface: on planar faces one lands
+/// exactly; the second serves curved ones.
+const SURFACE_STEPS: usize = 2;
+
 /// How far leaves may merge.
 #[derive(Clone, Copy, Debug)]
 pub struct Merging {
@@ -304,19 +308,39 @@ pub fn build<S: Sampler>(
                 continue;
             }
             *slot = out.vertices.len() as u32;
-            for pair in 0..2u8 {
-                let mut sum = DVec3::ZERO;
-                let mut count = 0.0;
+            // Each pair's vertex where its two crossings' tangent lines meet in the face,
+            // kept in the face and moved onto the surface's curve there: the chord's middle
+            // cut the corner of a crease crossing the face (the turned cube's face vertices
+            // were 0.19 of a cell inside at depth 6 and 9).
+            let (lo, hi) = face_box(grid, base, cell.at, axis);
+            let mut placed = [DVec3::ZERO; 2];
+            let mut middles = [DVec3::ZERO; 2];
+            for (pair, (v, middle)) in placed.iter_mut().zip(middles.iter_mut()).enumerate() {
+                let mut qef = Qef::new(origin);
                 for e in 0..12 {
-                    if case.lower_pair[axis][e] == pair
+                    if usize::from(case.lower_pair[axis][e]) == pair
                         && let Some(x) = crossing_of(cell.at, e)
                     {
-                        sum += x.pos;
-                        count += 1.0;
+                        qef.add(x.pos, x.normal);
                     }
                 }
-                let count: f64 = if count > 0.0 { count } else { 1.0 };
-                out.vertices.push((sum / count).as_vec3().to_array());
+                *middle = qef.mass_point();
+                *v = onto_surface(
+                    sampler,
+                    ev,
+                    local,
+                    qef.solve_in(lo, hi),
+                    (lo, hi),
+                    Some(axis),
+                );
+            }
+            // Two patches' vertices must stay two points, as written (f32) too: both can
+            // step onto the same stretch of the surface's curve.
+            let apart = placed[0].distance(placed[1]) > grid.cell * INSET
+                && placed[0].as_vec3() != placed[1].as_vec3();
+            let pick = if apart { placed } else { middles };
+            for v in pick {
+                out.vertices.push(v.as_vec3().to_array());
             }
         }
         let [i, j, k] = cell.at;
@@ -357,6 +381,56 @@ pub fn build<S: Sampler>(
             });
         }
     }
+}
+
+/// A vertex that its box held back from where its planes meet, moved along the field's
+/// gradient towards the surface as far as the box allows (along the plane across `flat`
+/// only, when given). Where a crease runs just outside a cell whose crossings lie on both
+/// of its faces, the box-held QEF point sits between the two planes, inside the solid: on
+/// the turned cube (fixtures/flat) at depth 7 such vertices were 0.092 of a cell from the
+/// surface, measured exactly, and 0.011 after these steps. A step is kept only when it
+/// brings |F| down.
+fn onto_surface<S: Sampler>(
+    sampler: &S,
+    ev: &mut S::Evals,
+    local: &S::Local,
+    x: DVec3,
+    (lo, hi): (DVec3, DVec3),
+    flat: Option<usize>,
+) -> DVec3 {
+    let mut field = |p: DVec3| {
+        let g = sampler.grad(ev, local, p.to_array());
+        let mut grad = DVec3::new(g[1], g[2], g[3]);
+        if let Some(a) = flat {
+            grad[a] = 0.0;
+        }
+        (g[0], grad)
+    };
+    let (mut x, (mut f, mut grad)) = (x, field(x));
+    for _ in 0..SURFACE_STEPS {
+        let slope2 = grad.length_squared();
+        if !(f.is_finite() && slope2 > 0.0 && slope2.is_finite()) || f == 0.0 {
+            break;
+        }
+        let next = (x - grad * (f / slope2)).clamp(lo, hi);
+        let (nf, ngrad) = field(next);
+        let better = nf.abs() < f.abs();
+        if !next.is_finite() || !better {
+            break;
+        }
+        (x, f, grad) = (next, nf, ngrad);
+    }
+    x
+}
+
+/// The square of the lower face of `axis` of the cell at local `at` of the block whose
+/// lowest cell is `base`, inset like a vertex box, as a box flat along `axis`.
+fn face_box(grid: &Grid, base: [i64; 3], at: [usize; 3], axis: usize) -> (DVec3, DVec3) {
+    let lo = grid.corner([0, 1, 2].map(|a| base[a] + at[a] as i64));
+    let (mut vlo, mut vhi) = grid.vertex_box(lo, grid.cell, grid.cell * INSET);
+    vlo[axis] = lo[axis];
+    vhi[axis] = lo[axis];
+    (DVec3::from(vlo), DVec3::from(vhi))
 }
 
 /// True when the four cells around the edge along `axis` from local corner `at` all lie in
@@ -430,7 +504,10 @@ impl<S: Sampler> Merger<'_, '_, S> {
                         let (a, z) = ranges[c];
                         let v = match vertex {
                             Some(v) => *v,
-                            None => self.finest_vertex(&self.surface[a]),
+                            None => {
+                                let cell = self.surface[a];
+                                self.finest_vertex(&cell)
+                            }
                         };
                         let vert = self.push_vertex(v);
                         for l in &mut self.leaf_of[a..z] {
@@ -482,14 +559,24 @@ impl<S: Sampler> Merger<'_, '_, S> {
     }
 
     /// The vertex of a finest cell with one patch.
-    fn finest_vertex(&self, cell: &Surface) -> DVec3 {
+    fn finest_vertex(&mut self, cell: &Surface) -> DVec3 {
         let mut qef = Qef::new(self.origin);
         for &id in self.crossings(cell) {
             let x = &self.input.crossings[id as usize];
             qef.add(x.pos, x.normal);
         }
         let (lo, hi) = self.node_box(0, cell.at);
-        qef.solve_in(lo, hi)
+        let (x, held) = qef.solve_held(lo, hi);
+        if held {
+            self.onto_surface(x, lo, hi)
+        } else {
+            x
+        }
+    }
+
+    /// A box-held vertex moved onto the surface (see [`onto_surface`]).
+    fn onto_surface(&mut self, x: DVec3, lo: DVec3, hi: DVec3) -> DVec3 {
+        onto_surface(self.sampler, self.ev, self.local, x, (lo, hi), None)
     }
 
     /// One vertex per patch of a finest cell, each kept in the cell; all at their patches'
@@ -526,8 +613,13 @@ impl<S: Sampler> Merger<'_, '_, S> {
         }
         let (lo, hi) = self.node_box(0, cell.at);
         let start = self.vertices.len();
-        for q in self.qefs.iter().take(patches) {
-            let v = q.solve_in(lo, hi);
+        for p in 0..patches {
+            let (v, held) = self.qefs[p].solve_held(lo, hi);
+            let v = if held {
+                self.onto_surface(v, lo, hi)
+            } else {
+                v
+            };
             self.vertices.push(v.as_vec3().to_array());
         }
         let placed = &self.vertices[start..];

@@ -15,14 +15,18 @@
 //! 4. `contour.rs`: one polygon per sign-changing edge on the leaves' boundaries, split
 //!    into triangles so that the result is a 2-manifold (the module doc there has the
 //!    argument);
-//! 5. `stream.rs`: the schedule, slab by slab along z, polygons handed to a
-//!    [`MeshSink`] as soon as they are known.
+//! 5. `stream.rs`: the schedule, slab by slab along z, polygons handed on as soon as
+//!    they are known;
+//! 6. `decimate.rs`: with a tolerance, edge collapses checked against the field (on
+//!    meshes of up to 65,536 triangles; larger ones go on unchanged), then the
+//!    [`MeshSink`].
 //!
 //! Everything samples the field clipped to the region (`isoforge_field::ClippedField`:
 //! F = max(f, d_box), NaN = outside), so models cut by their region come out capped.
 
 pub mod cell;
 pub mod contour;
+pub mod decimate;
 pub mod estimate;
 pub mod hermite;
 pub mod leaf;

@@ -127,15 +127,21 @@ impl Qef {
 
     /// The minimizer over the box `[lo, hi]` (absolute coordinates; `lo <= hi`).
     pub fn solve_in(&self, lo: DVec3, hi: DVec3) -> DVec3 {
+        self.solve_held(lo, hi).0
+    }
+
+    /// [`Qef::solve_in`], and whether the box held the point back (the free minimizer lies
+    /// outside it, so the point is a compromise between planes that meet elsewhere).
+    pub fn solve_held(&self, lo: DVec3, hi: DVec3) -> (DVec3, bool) {
         if self.count == 0 {
-            return ((lo + hi) * 0.5).clamp(lo, hi);
+            return (((lo + hi) * 0.5).clamp(lo, hi), false);
         }
         let (lo, hi) = (lo - self.origin, hi - self.origin);
         let m = self.mass / f64::from(self.count);
         let free = self.solve_fixed(m, [None; 3]);
         let inside = |x: DVec3| x.cmpge(lo).all() && x.cmple(hi).all();
         if inside(free) {
-            return self.origin + free;
+            return (self.origin + free, false);
         }
         // The box's 26 faces, edges and corners: each axis held at lo, held at hi, or free.
         let mut best: Option<(f64, f64, DVec3)> = None;
@@ -163,10 +169,11 @@ impl Qef {
                 best = Some((e, d, x));
             }
         }
-        match best {
-            Some((_, _, x)) => self.origin + x,
-            None => self.origin + free.clamp(lo, hi),
-        }
+        let x = match best {
+            Some((_, _, x)) => x,
+            None => free.clamp(lo, hi),
+        };
+        (self.origin + x, true)
     }
 
     /// The truncated minimizer with some coordinates held (relative coordinates), around

@@ -15,6 +15,7 @@ use std::sync::atomic::Ordering;
 use rayon::prelude::*;
 
 use super::contour::{self, Polygon, Ref};
+use super::decimate::{self, Decimator};
 use super::hermite::{self, Crossing, EdgeRef, Scratch};
 use super::leaf::{self, BlockInput, BlockOut, LeafScratch, Merging, NO_VERT};
 use super::merge::{AboveBlocks, Resolved};
@@ -39,8 +40,28 @@ struct Pass2Scratch {
     crossings: Vec<Crossing>,
 }
 
-/// Meshes a sampled field into a sink.
+/// Meshes a sampled field into a sink; with merging on, through the edge collapses of
+/// `decimate.rs`.
 pub fn run<S: Sampler>(
+    sampler: &S,
+    settings: &MeshSettings,
+    merging: Merging,
+    block_shift: u32,
+    sink: &mut dyn MeshSink,
+) -> Result<(), MeshError> {
+    if !merging.on() {
+        return contour_into(sampler, settings, merging, block_shift, sink);
+    }
+    let tolerance = settings
+        .effective_tolerance()
+        .min(settings.cell() * decimate::MAX_CELLS);
+    let mut decimator = Decimator::new(sampler, tolerance, sink);
+    contour_into(sampler, settings, merging, block_shift, &mut decimator)?;
+    decimator.finish().map_err(MeshError::Write)
+}
+
+/// The octree, the leaves and their polygons, into a sink.
+fn contour_into<S: Sampler>(
     sampler: &S,
     settings: &MeshSettings,
     merging: Merging,

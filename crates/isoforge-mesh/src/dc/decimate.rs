@@ -1,0 +1,706 @@
+//! Edge collapses on the streamed mesh, checked against the field: what the octree merge
+//! cannot do along sharp edges that run across the lattice.
+//!
+//! A leaf has one vertex, so a leaf edge may hold one crossing (`topology.rs`). Along a
+//! cube's edge turned off the lattice, lattice lines enter and leave the solid within a
+//! cell or two, and no leaf there grows past a few cells: the turned cube (fixtures/flat)
+//! was 16,224 triangles at depth 9, nearly all of them along its 12 edges. Here those
+//! triangles are collapsed away, as in Garland and Heckbert's simplification (1997) with
+//! half-edge collapses (a vertex moves onto a neighbour that stays where dual contouring
+//! put it, so vertices on creases and corners stay there):
+//!
+//! * a collapse `b → a` is tried only when both fans are complete (every triangle around
+//!   `a` and `b` has come) and neither vertex has been written out;
+//! * the link condition (the vertices next to both `a` and `b` are exactly the two
+//!   opposite the edge) keeps the mesh a closed 2-manifold (Dey et al. 1999); no triangle
+//!   may turn more than 60°, face against the field's gradient, or sweep more than a
+//!   little volume;
+//! * the tolerance: sample points on every new triangle within it by the field (|F| /
+//!   |∇F|, exact inside a convex crease, where chords run); around a crease, where dual
+//!   contouring's own triangles already miss it, as much as they did and at most twice it;
+//! * only crease vertices, or vertices where the area-weighted quadric says the surface is
+//!   flat, are tried: smooth parts are already as coarse as the octree merge allows.
+//!
+//! Memory stays bounded: up to [`CHUNK`] triangles are held and collapsed at the end; a
+//! larger mesh goes on unchanged once it outgrows that. (Collapsing chunk by chunk, open
+//! fans frozen at the seams, works, and the code for it stays; but on the gyroid sphere at
+//! depth 9 it cost a third more time and 14 MiB more for 15 % fewer triangles, and large
+//! meshes are smooth ones, already as coarse as the merge allows.)
+
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, HashMap};
+use std::io;
+
+use glam::DVec3;
+
+use super::sampler::Sampler;
+use crate::sink::MeshSink;
+
+/// The most triangles collapsed: a few MiB of working structures. The turned cube at depth
+/// 9 (16,224 merged triangles) and the heart fit; at 2^18, spheres_chain at depth 9 (176,048)
+/// took 3.3 times as long and 26 MiB more to lose 7 % of its triangles.
+pub const CHUNK: usize = 1 << 16;
+
+/// The collapses keep within this many finest cells of the surface whatever the
+/// tolerance: a triangle's sample points say little about a surface that bends within it,
+/// and at 20 cells the thin sheets of a gyroid sphere filled in (volume 1.76 for 0.8).
+pub const MAX_CELLS: f64 = 1.0;
+
+/// A new triangle's normal may turn at most this far from the one it replaces (cosine).
+const MIN_TURN_COS: f64 = 0.5;
+
+/// Rounds of collapses at most. On the turned cube a second round finds a few more; a
+/// third none.
+const ROUNDS: usize = 3;
+
+/// Away from creases, a collapse is tried only where the quadric's mean distance is
+/// below this share of the tolerance: the octree merge has already made smooth parts as
+/// coarse as the tolerance allows, and trying them all cost the gyroid sphere at depth 9
+/// a third more time for 15 % fewer triangles.
+const FLAT_SHARE: f64 = 0.1;
+
+/// A new triangle's normal and the field's gradient at its sample points may differ by
+/// at most this much (cosine, 120°): enough to turn away a triangle folded over, while the
+/// small triangles dual contouring leaves across a crease, whose normals run along it,
+/// still pass (at 0 the turned cube at depth 9 kept 2,392 triangles).
+const FACING_COS: f64 = -0.5;
+
+/// Around a crease, new triangles may miss the surface by as much as the old ones did, but
+/// by no more than this many tolerances. Unbounded, the allowance spread along the creases
+/// of a coarse gyroid sphere (depth 5) and took a third of its volume; at 3 a one-cell blob
+/// of the 256 sign patterns turned inside out; at 2 the turned cube at depth 9 is 1,576
+/// triangles (2,896 with no allowance).
+const CREASE_ALLOWANCE: f64 = 2.0;
+
+/// Two normals around a vertex that differ by more than this (cosine, 84°) make it a
+/// crease or corner vertex. At 0.3 and 0.8 DC's small triangles on the gyroid counted as
+/// creases too, and the collapses there took twice the time.
+const CREASE_COS: f64 = 0.1;
+
+/// Triangles lower than this fraction of their longest side are slivers.
+const SLIVER: f64 = 0.05;
+
+/// Sample points on a new triangle, in barycentric coordinates: the edge middles and the
+/// centre (its corners are vertices, placed on the surface already).
+const SAMPLES: [[f64; 3]; 4] = [
+    [0.5, 0.5, 0.0],
+    [0.0, 0.5, 0.5],
+    [0.5, 0.0, 0.5],
+    [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
+];
+
+/// A vertex written out whose fan is still open.
+#[derive(Clone, Debug)]
+struct Frozen {
+    out: u32,
+    pos: [f32; 3],
+    /// Per neighbour, how often it starts minus ends an edge of the fan's rim so far.
+    rim: Vec<(u32, i32)>,
+}
+
+/// Sums of squared distances to planes, around an origin: `xᵀ A x − 2 bᵀ x + c`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Quadric {
+    a: [f64; 6],
+    b: DVec3,
+    c: f64,
+    /// The weights summed.
+    n: f64,
+}
+
+impl Quadric {
+    /// The plane through `p` with unit normal `n`, of weight `w`.
+    fn plane(n: DVec3, p: DVec3, w: f64) -> Self {
+        let d = n.dot(p);
+        let m = n * w;
+        Quadric {
+            a: [
+                m.x * n.x,
+                m.x * n.y,
+                m.x * n.z,
+                m.y * n.y,
+                m.y * n.z,
+                m.z * n.z,
+            ],
+            b: m * d,
+            c: w * d * d,
+            n: w,
+        }
+    }
+    fn add(&mut self, o: &Quadric) {
+        for (s, t) in self.a.iter_mut().zip(o.a) {
+            *s += t;
+        }
+        self.b += o.b;
+        self.c += o.c;
+        self.n += o.n;
+    }
+    fn at(&self, x: DVec3) -> f64 {
+        let a = &self.a;
+        let ax = DVec3::new(
+            a[0] * x.x + a[1] * x.y + a[2] * x.z,
+            a[1] * x.x + a[3] * x.y + a[4] * x.z,
+            a[2] * x.x + a[4] * x.y + a[5] * x.z,
+        );
+        (x.dot(ax) - 2.0 * self.b.dot(x) + self.c).max(0.0)
+    }
+    /// The weighted mean squared distance at `x`.
+    fn mean_at(&self, x: DVec3) -> f64 {
+        if self.n > 0.0 {
+            self.at(x) / self.n
+        } else {
+            0.0
+        }
+    }
+}
+
+/// A sink that collapses what the tolerance allows before passing the mesh on.
+pub struct Decimator<'a, S: Sampler> {
+    sampler: &'a S,
+    ev: S::Evals,
+    root: S::Local,
+    tolerance: f64,
+    inner: &'a mut dyn MeshSink,
+    /// Input index of the chunk's first vertex.
+    base: u32,
+    /// The chunk's vertices, from `base` on.
+    verts: Vec<[f32; 3]>,
+    /// The chunk's triangles, in input indices.
+    tris: Vec<[u32; 3]>,
+    /// Written vertices with open fans, by input index.
+    frozen: HashMap<u32, Frozen>,
+    /// Output vertices so far.
+    written: u32,
+    /// Input vertices so far.
+    seen: u32,
+    /// Set once the mesh outgrew a chunk: everything goes straight on.
+    through: bool,
+}
+
+impl<'a, S: Sampler> Decimator<'a, S> {
+    /// Collapses within `tolerance` (model units) on the way to `inner`.
+    pub fn new(sampler: &'a S, tolerance: f64, inner: &'a mut dyn MeshSink) -> Self {
+        Decimator {
+            sampler,
+            ev: sampler.evals(),
+            root: sampler.root(),
+            tolerance,
+            inner,
+            base: 0,
+            verts: Vec::new(),
+            tris: Vec::new(),
+            frozen: HashMap::new(),
+            written: 0,
+            seen: 0,
+            through: false,
+        }
+    }
+
+    /// Collapses and writes what is held; call once the mesher is done.
+    pub fn finish(&mut self) -> io::Result<()> {
+        if self.through {
+            return Ok(());
+        }
+        self.flush()
+    }
+
+    /// Gives up on a mesh too large for one chunk: what is held goes on unchanged (the
+    /// indices stay those the mesher gave), and so does everything after it.
+    fn pass_through(&mut self) -> io::Result<()> {
+        self.through = true;
+        for &p in &self.verts {
+            self.inner.vertex(p)?;
+        }
+        for &t in &self.tris {
+            let corners = t.map(|v| self.verts.get(v as usize).copied().unwrap_or([0.0; 3]));
+            self.inner.triangle(t, corners)?;
+        }
+        self.verts = Vec::new();
+        self.tris = Vec::new();
+        Ok(())
+    }
+
+    /// One round: collapse, write, keep the open fans' vertices frozen.
+    fn flush(&mut self) -> io::Result<()> {
+        let mut chunk = Chunk::new(self)?;
+        chunk.collapse(self);
+        chunk.write(self)
+    }
+}
+
+impl<S: Sampler> MeshSink for Decimator<'_, S> {
+    fn vertex(&mut self, p: [f32; 3]) -> io::Result<()> {
+        if self.through {
+            return self.inner.vertex(p);
+        }
+        self.verts.push(p);
+        self.seen += 1;
+        Ok(())
+    }
+
+    fn triangle(&mut self, t: [u32; 3], corners: [[f32; 3]; 3]) -> io::Result<()> {
+        if self.through {
+            return self.inner.triangle(t, corners);
+        }
+        self.tris.push(t);
+        if self.tris.len() >= CHUNK {
+            self.pass_through()?;
+        }
+        Ok(())
+    }
+}
+
+/// The working structures of one round, in chunk-local vertex indices: the chunk's own
+/// vertices first, then the frozen ones its triangles use.
+struct Chunk {
+    pos: Vec<DVec3>,
+    /// Input index of each local vertex.
+    input: Vec<u32>,
+    /// Fan complete (and not frozen): may take part in a collapse.
+    free: Vec<bool>,
+    /// On a crease or corner: the normals around it spread wide.
+    crease: Vec<bool>,
+    alive_v: Vec<bool>,
+    quadric: Vec<Quadric>,
+    /// Triangles around each vertex (indices into `tris`; dead ones filtered when read).
+    around: Vec<Vec<u32>>,
+    tris: Vec<[u32; 3]>,
+    alive_t: Vec<bool>,
+    /// Each triangle's distance from the surface at its sample points, once measured
+    /// (NaN until then).
+    dev: Vec<f64>,
+    /// Around this point the quadrics are summed (precision).
+    origin: DVec3,
+}
+
+impl Chunk {
+    fn new<S: Sampler>(d: &mut Decimator<'_, S>) -> io::Result<Self> {
+        let n = d.verts.len();
+        let mut input: Vec<u32> = (0..n as u32).map(|i| d.base + i).collect();
+        let mut pos: Vec<DVec3> = d.verts.iter().map(|&p| to_d(p)).collect();
+        let mut frozen = vec![false; n];
+        let mut local_of_frozen: HashMap<u32, u32> = HashMap::new();
+        let tris_in = std::mem::take(&mut d.tris);
+        let mut tris = Vec::with_capacity(tris_in.len());
+        for t in tris_in {
+            let mut lt = [0u32; 3];
+            for (l, &v) in lt.iter_mut().zip(&t) {
+                *l = if v >= d.base {
+                    v - d.base
+                } else if let Some(&l) = local_of_frozen.get(&v) {
+                    l
+                } else {
+                    // Earlier vertices are either frozen or had complete fans.
+                    let f = d.frozen.get(&v).ok_or_else(|| {
+                        io::Error::other("internal error: a triangle of a finished vertex")
+                    })?;
+                    input.push(v);
+                    pos.push(to_d(f.pos));
+                    frozen.push(true);
+                    local_of_frozen.insert(v, (input.len() - 1) as u32);
+                    (input.len() - 1) as u32
+                };
+            }
+            tris.push(lt);
+        }
+        let m = pos.len();
+        let origin = pos.first().copied().unwrap_or(DVec3::ZERO);
+        let mut around = vec![Vec::new(); m];
+        let mut quadric = vec![Quadric::default(); m];
+        let mut rim: Vec<Vec<(u32, i32)>> = vec![Vec::new(); m];
+        for (i, t) in tris.iter().enumerate() {
+            let [p, q, r] = t.map(|v| pos[v as usize] - origin);
+            let n = (q - p).cross(r - p);
+            // Weighted by area: a sliver's plane says little about the surface.
+            let plane = if n.length_squared() > 0.0 {
+                Quadric::plane(n.normalize(), p, n.length() / 2.0)
+            } else {
+                Quadric::default()
+            };
+            for k in 0..3 {
+                let v = t[k] as usize;
+                around[v].push(i as u32);
+                quadric[v].add(&plane);
+                tally(&mut rim[v], t[(k + 1) % 3], 1);
+                tally(&mut rim[v], t[(k + 2) % 3], -1);
+            }
+        }
+        let free = (0..m)
+            .map(|v| !frozen[v] && !around[v].is_empty() && rim[v].iter().all(|e| e.1 == 0))
+            .collect();
+        let crease = (0..m)
+            .map(|v| {
+                let normals: Vec<DVec3> = around[v]
+                    .iter()
+                    .map(|&t| tris[t as usize].map(|w| pos[w as usize]))
+                    .filter(|t| !sliver(t))
+                    .map(|t| (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero())
+                    .collect();
+                normals
+                    .iter()
+                    .enumerate()
+                    .any(|(i, n)| normals[i + 1..].iter().any(|o| n.dot(*o) < CREASE_COS))
+            })
+            .collect();
+        Ok(Chunk {
+            crease,
+            alive_v: vec![true; m],
+            alive_t: vec![true; tris.len()],
+            dev: vec![f64::NAN; tris.len()],
+            pos,
+            input,
+            free,
+            quadric,
+            around,
+            tris,
+            origin,
+        })
+    }
+
+    /// The live triangles around `v`.
+    fn fan(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
+        self.around[v as usize]
+            .iter()
+            .copied()
+            .filter(|&t| self.alive_t[t as usize])
+    }
+
+    /// The vertices next to `v`, sorted.
+    fn neighbours(&self, v: u32) -> Vec<u32> {
+        let mut out: Vec<u32> = self
+            .fan(v)
+            .flat_map(|t| self.tris[t as usize])
+            .filter(|&w| w != v)
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    fn cost(&self, b: u32, a: u32) -> f64 {
+        let mut q = self.quadric[a as usize];
+        q.add(&self.quadric[b as usize]);
+        q.mean_at(self.pos[a as usize] - self.origin)
+    }
+
+    /// Greedy collapses, cheapest first, in rounds until a round finds none (a collapse
+    /// can unblock one next to it that was refused before).
+    fn collapse<S: Sampler>(&mut self, d: &mut Decimator<'_, S>) {
+        let flat = (d.tolerance * FLAT_SHARE).powi(2);
+        if flat.is_nan() || flat <= 0.0 {
+            return;
+        }
+        let mut heap = BinaryHeap::new();
+        // Crease vertices are tried whatever their quadric (the triangles cutting the
+        // crease weigh in it); elsewhere only where the surface is flat.
+        let push = |c: &Chunk, heap: &mut BinaryHeap<_>, b: u32, a: u32| {
+            if c.free[b as usize] && c.free[a as usize] {
+                let cost = c.cost(b, a);
+                if c.crease[b as usize] || cost <= flat {
+                    heap.push(Reverse((cost.to_bits(), b, a)));
+                }
+            }
+        };
+        for _ in 0..ROUNDS {
+            let mut done = 0usize;
+            for v in 0..self.pos.len() as u32 {
+                if !self.free[v as usize] || !self.alive_v[v as usize] {
+                    continue;
+                }
+                for w in self.neighbours(v) {
+                    push(self, &mut heap, v, w);
+                }
+            }
+            while let Some(Reverse((bits, b, a))) = heap.pop() {
+                if !(self.alive_v[b as usize] && self.alive_v[a as usize]) {
+                    continue;
+                }
+                // Quadrics only grow: a changed cost goes back in its new place.
+                if self.cost(b, a).to_bits() != bits {
+                    push(self, &mut heap, b, a);
+                    continue;
+                }
+                if !self.can_collapse(d, b, a) {
+                    continue;
+                }
+                self.apply(b, a);
+                done += 1;
+                for w in self.neighbours(a) {
+                    push(self, &mut heap, w, a);
+                    push(self, &mut heap, a, w);
+                }
+            }
+            if done == 0 {
+                break;
+            }
+        }
+    }
+
+    /// True when `b → a` keeps the mesh a closed 2-manifold (the link condition, no
+    /// tetrahedron folded flat), turns no triangle over, and keeps the surface within
+    /// the tolerance by the field.
+    fn can_collapse<S: Sampler>(&mut self, d: &mut Decimator<'_, S>, b: u32, a: u32) -> bool {
+        let (na, nb) = (self.neighbours(a), self.neighbours(b));
+        if nb.binary_search(&a).is_err() {
+            return false;
+        }
+        let shared: Vec<u32> = na
+            .iter()
+            .copied()
+            .filter(|v| nb.binary_search(v).is_ok())
+            .collect();
+        let opposite: Vec<u32> = self
+            .fan(b)
+            .map(|t| self.tris[t as usize])
+            .filter(|t| t.contains(&a))
+            .map(|t| t.iter().copied().find(|&v| v != a && v != b).unwrap_or(a))
+            .collect();
+        if opposite.len() != 2 || shared.len() != 2 || !opposite.iter().all(|v| shared.contains(v))
+        {
+            return false;
+        }
+        // `a` keeps at least three neighbours, or a tetrahedron would fold flat.
+        if na.len() + nb.len() - shared.len() - 2 < 3 {
+            return false;
+        }
+        let pa = self.pos[a as usize];
+        let pb = self.pos[b as usize];
+        let min_area = (d.tolerance * d.tolerance) * 1e-6;
+        let mut new_tris = Vec::new();
+        // The volume the collapse sweeps, signed, against the fan's area: a tolerance's
+        // depth over the fan at most, or the surface folds (a small closed blob can turn
+        // inside out with every triangle turning a little).
+        let (mut six_volume, mut twice_area) = (0.0, 0.0);
+        for t in self.fan(b) {
+            let [p, q, r] = self.tris[t as usize].map(|v| self.pos[v as usize] - pb);
+            twice_area += (q - p).cross(r - p).length();
+            // Tetrahedron from b's old place to b's new one under this triangle.
+            let k = self.tris[t as usize]
+                .iter()
+                .position(|&v| v == b)
+                .unwrap_or(0);
+            let (u, w) = ([p, q, r][(k + 1) % 3], [p, q, r][(k + 2) % 3]);
+            six_volume += (pa - pb).dot(u.cross(w));
+        }
+        if six_volume.abs() / 6.0 > d.tolerance * CREASE_ALLOWANCE * twice_area / 2.0 {
+            return false;
+        }
+        for t in self.fan(b) {
+            let tri = self.tris[t as usize];
+            if tri.contains(&a) {
+                continue;
+            }
+            let old = tri.map(|v| self.pos[v as usize]);
+            let new = tri.map(|v| if v == b { pa } else { self.pos[v as usize] });
+            let n_old = (old[1] - old[0]).cross(old[2] - old[0]);
+            let n_new = (new[1] - new[0]).cross(new[2] - new[0]);
+            if n_new.length_squared() <= min_area * min_area {
+                return false;
+            }
+            let turn = n_new.normalize().dot(n_old.normalize_or_zero());
+            if turn.is_nan() || turn < MIN_TURN_COS {
+                return false;
+            }
+            new_tris.push(new);
+        }
+        if new_tris
+            .iter()
+            .all(|t| self.deviation(d, t, d.tolerance, true) <= d.tolerance)
+        {
+            return true;
+        }
+        // Where the triangles around a crease already missed the tolerance (dual
+        // contouring cuts creases), the new ones may miss it by as much, never more: the
+        // worst place does not get worse.
+        if !self.crease[b as usize] {
+            return false;
+        }
+        let fan: Vec<u32> = self.fan(b).collect();
+        let mut allowance = d.tolerance;
+        for t in fan {
+            allowance = allowance.max(self.known_deviation(d, t));
+        }
+        let allowance = allowance.min(d.tolerance * CREASE_ALLOWANCE);
+        allowance > d.tolerance
+            && new_tris
+                .iter()
+                .all(|t| self.deviation(d, t, allowance, true) <= allowance)
+    }
+
+    /// The largest distance from the surface, by the field, of a triangle's sample
+    /// points; infinite as soon as one is beyond `stop` (or the field says nothing), or,
+    /// with `facing`, as soon as the field's gradient there points against the triangle's
+    /// normal (a fold: with every triangle turning less than the limit, a small closed
+    /// blob could still turn inside out at a large tolerance).
+    fn deviation<S: Sampler>(
+        &self,
+        d: &mut Decimator<'_, S>,
+        t: &[DVec3; 3],
+        stop: f64,
+        facing: bool,
+    ) -> f64 {
+        let n = (t[1] - t[0]).cross(t[2] - t[0]);
+        let mut worst = 0.0f64;
+        for w in &SAMPLES {
+            let p = t[0] * w[0] + t[1] * w[1] + t[2] * w[2];
+            let g = d.sampler.grad(&mut d.ev, &d.root, p.to_array());
+            let grad = DVec3::new(g[1], g[2], g[3]);
+            let distance = g[0].abs() / grad.length();
+            let faces_out = grad.dot(n) > FACING_COS * grad.length() * n.length();
+            if distance.is_nan() || distance > stop || facing && !faces_out {
+                return f64::INFINITY;
+            }
+            worst = worst.max(distance);
+        }
+        worst
+    }
+
+    /// The largest distance of triangle `t`'s sample points from the surface, measured
+    /// once.
+    fn known_deviation<S: Sampler>(&mut self, d: &mut Decimator<'_, S>, t: u32) -> f64 {
+        let known = self.dev[t as usize];
+        if !known.is_nan() {
+            return known;
+        }
+        let tri = self.tris[t as usize].map(|v| self.pos[v as usize]);
+        // Where the field says nothing (NaN), the triangle allows nothing more.
+        let e = self.deviation(d, &tri, f64::MAX, false);
+        let e = if e.is_finite() { e } else { 0.0 };
+        self.dev[t as usize] = e;
+        e
+    }
+
+    fn apply(&mut self, b: u32, a: u32) {
+        let fan: Vec<u32> = self.fan(b).collect();
+        for t in fan {
+            let tri = &mut self.tris[t as usize];
+            if tri.contains(&a) {
+                self.alive_t[t as usize] = false;
+                continue;
+            }
+            for v in tri.iter_mut() {
+                if *v == b {
+                    *v = a;
+                }
+            }
+            self.dev[t as usize] = f64::NAN;
+            self.around[a as usize].push(t);
+        }
+        self.crease[a as usize] |= self.crease[b as usize];
+        let qb = self.quadric[b as usize];
+        self.quadric[a as usize].add(&qb);
+        self.alive_v[b as usize] = false;
+        self.around[b as usize].clear();
+    }
+
+    /// Writes the live triangles and the vertices they use; vertices with open fans stay
+    /// frozen for the next chunk.
+    fn write<S: Sampler>(self, d: &mut Decimator<'_, S>) -> io::Result<()> {
+        let m = self.pos.len();
+        let own = d.verts.len();
+        let mut out = vec![u32::MAX; m];
+        for (v, o) in out.iter_mut().enumerate().skip(own) {
+            if let Some(f) = d.frozen.get(&self.input[v]) {
+                *o = f.out;
+            }
+        }
+        // Rims of the fans as written, to tell which stay open.
+        let mut rim: Vec<Vec<(u32, i32)>> = vec![Vec::new(); m];
+        for (t, tri) in self.tris.iter().enumerate() {
+            if !self.alive_t[t] {
+                continue;
+            }
+            for k in 0..3 {
+                let v = tri[k] as usize;
+                if out[v] == u32::MAX {
+                    out[v] = d.written;
+                    d.written += 1;
+                    d.inner.vertex(d.verts[v])?;
+                }
+                let (p, q) = (
+                    self.input[tri[(k + 1) % 3] as usize],
+                    self.input[tri[(k + 2) % 3] as usize],
+                );
+                tally(&mut rim[v], p, 1);
+                tally(&mut rim[v], q, -1);
+            }
+            let ids = tri.map(|v| out[v as usize]);
+            let corners = tri.map(|v| self.position(d, v as usize));
+            if ids.contains(&u32::MAX) {
+                return Err(io::Error::other("internal error: a vertex never written"));
+            }
+            d.inner.triangle(ids, corners)?;
+        }
+        // Vertices that came but have no triangle yet are open too: their triangles wait
+        // for merges above the blocks.
+        for v in 0..own {
+            if !self.alive_v[v] {
+                continue;
+            }
+            let open = self.around[v].iter().all(|&t| !self.alive_t[t as usize])
+                || rim[v].iter().any(|e| e.1 != 0);
+            if !open {
+                continue;
+            }
+            if out[v] == u32::MAX {
+                out[v] = d.written;
+                d.written += 1;
+                d.inner.vertex(d.verts[v])?;
+            }
+            d.frozen.insert(
+                d.base + v as u32,
+                Frozen {
+                    out: out[v],
+                    pos: d.verts[v],
+                    rim: std::mem::take(&mut rim[v]),
+                },
+            );
+        }
+        for (&key, rim) in self.input.iter().zip(&rim).skip(own) {
+            let closed = match d.frozen.get_mut(&key) {
+                Some(f) => {
+                    for &(w, n) in rim {
+                        tally(&mut f.rim, w, n);
+                    }
+                    f.rim.iter().all(|e| e.1 == 0)
+                }
+                None => false,
+            };
+            if closed {
+                d.frozen.remove(&key);
+            }
+        }
+        d.base = d.seen;
+        d.verts.clear();
+        Ok(())
+    }
+
+    fn position<S: Sampler>(&self, d: &Decimator<'_, S>, v: usize) -> [f32; 3] {
+        match d.verts.get(v) {
+            Some(p) => *p,
+            None => d.frozen.get(&self.input[v]).map_or([0.0; 3], |f| f.pos),
+        }
+    }
+}
+
+/// True when a triangle's height is below [`SLIVER`] of its longest side.
+fn sliver(t: &[DVec3; 3]) -> bool {
+    let longest2 = (0..3)
+        .map(|k| t[k].distance_squared(t[(k + 1) % 3]))
+        .fold(0.0, f64::max);
+    let twice_area = (t[1] - t[0]).cross(t[2] - t[0]).length();
+    // height = 2 area / longest side
+    twice_area * twice_area < SLIVER * SLIVER * longest2 * longest2
+}
+
+fn to_d(p: [f32; 3]) -> DVec3 {
+    DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]))
+}
+
+/// Adds `n` to `w`'s count.
+fn tally(rim: &mut Vec<(u32, i32)>, w: u32, n: i32) {
+    match rim.iter_mut().find(|e| e.0 == w) {
+        Some(e) => e.1 += n,
+        None => rim.push((w, n)),
+    }
+}
