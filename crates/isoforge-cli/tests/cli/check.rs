@@ -189,3 +189,44 @@ fn gcode_files_are_summed_up() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("bad.gcode"));
 }
+
+/// A 3MF package of one model entry, deflated.
+fn package(xml: &str) -> Vec<u8> {
+    use std::io::Write as _;
+    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let opts = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated);
+    zip.start_file("3D/3dmodel.model", opts).expect("entry");
+    zip.write_all(xml.as_bytes()).expect("write");
+    zip.finish().expect("zip").into_inner()
+}
+
+#[test]
+fn a_3mf_that_says_it_inflates_to_gigabytes_is_refused_before_inflating() {
+    // A small, valid package whose size fields say its model inflates to 4 GiB, as a zip
+    // bomb's do: refused from the declared size, with nothing inflated.
+    let xml = "<?xml version=\"1.0\"?><model unit=\"millimeter\"><resources><object id=\"1\">\
+               <mesh><vertices><vertex x=\"0\" y=\"0\" z=\"0\"/><vertex x=\"1\" y=\"0\" z=\"0\"/>\
+               <vertex x=\"0\" y=\"1\" z=\"0\"/></vertices><triangles>\
+               <triangle v1=\"0\" v2=\"1\" v3=\"2\"/></triangles></mesh></object></resources>\
+               <build><item objectid=\"1\"/></build></model>";
+    let mut bytes = package(xml);
+    let central = bytes
+        .windows(4)
+        .position(|w| w == b"PK\x01\x02")
+        .expect("a central directory");
+    // The uncompressed-size fields: local header offset 22, central record offset 24.
+    for at in [22, central + 24] {
+        bytes[at..at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("bomb.3mf");
+    std::fs::write(&path, &bytes).expect("write");
+    let out = isoforge(&["check", path.to_str().expect("utf-8")]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_ne!(out.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("bomb.3mf") && stderr.contains("more than"),
+        "{stderr}"
+    );
+}
