@@ -32,7 +32,7 @@ pub mod sink;
 pub use check::{MeshReport, StreamCheck, StreamReport, check};
 pub use dc::{
     DEFAULT_TOLERANCE_CELLS, Estimate, MAX_DEPTH, MeshError, MeshSettings, Progress, estimate,
-    mesh_shape, mesh_shape_into, try_mesh_shape,
+    estimate_bound, mesh_shape, mesh_shape_into, try_mesh_shape,
 };
 pub use deviation::{Deviation, deviation};
 pub use io::{MeshFormat, MeshIoError, read_mesh, write_mesh};

@@ -165,9 +165,15 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
     let mut settings = MeshSettings::new(bounds, depth);
     settings.threads = args.threads.unwrap_or(0);
     settings.tolerance = args.tolerance;
-    let estimate = isoforge_mesh::estimate(&loaded.model.shape, &settings);
+    // The lattice's own bound first: when even a mesh of every block fits (depth 9 and
+    // below, on any machine), the octree is not built twice just to count.
+    let available = crate::machine::available_memory();
+    let mut estimate = isoforge_mesh::estimate_bound(&settings);
+    if available.is_some_and(|a| estimate.bytes > a as f64) {
+        estimate = isoforge_mesh::estimate(&loaded.model.shape, &settings);
+    }
     if !args.no_memory_check {
-        check_fits(&estimate, crate::machine::available_memory())?;
+        check_fits(&estimate, available)?;
     }
 
     let bar = progress_bar(global, 1000, "meshing");

@@ -38,14 +38,27 @@ pub struct Estimate {
     pub bytes: f64,
 }
 
-/// Estimates the cost of `mesh_shape_into(shape, settings, ..)`.
+/// Estimates the cost of `mesh_shape_into(shape, settings, ..)` from the blocks that may
+/// hold surface, counted by building the octree at the probe depth.
 pub fn estimate(shape: &Shape, settings: &MeshSettings) -> Estimate {
     let depth = settings.depth;
     let probe = depth.min(PROBE_DEPTH);
     let sampler = tape_sampler(shape, settings);
     let grid = Grid::new(&settings.bounds, u32::from(probe), BLOCK_SHIFT);
     let counted = Octree::build(&sampler, grid).blocks.len() as f64;
-    let blocks = counted * 4f64.powi(i32::from(depth - probe));
+    of_blocks(depth, counted * 4f64.powi(i32::from(depth - probe)))
+}
+
+/// The most a mesh at the settings' depth can cost, whatever the shape: every block of the
+/// lattice kept. Nothing is evaluated, so a caller can skip [`estimate`]'s octree (which the
+/// mesher would build again) whenever this bound already fits.
+pub fn estimate_bound(settings: &MeshSettings) -> Estimate {
+    let depth = settings.depth.min(super::MAX_DEPTH);
+    let per_side = 2f64.powi(i32::from(depth) - BLOCK_SHIFT.min(u32::from(depth)) as i32);
+    of_blocks(depth, per_side.powi(3))
+}
+
+fn of_blocks(depth: u8, blocks: f64) -> Estimate {
     let block_cells = f64::from(1u32 << (3 * BLOCK_SHIFT.min(u32::from(depth))));
     Estimate {
         depth,
@@ -77,6 +90,23 @@ mod tests {
             sixteen.bytes > 16e9,
             "depth 16 of a sphere is many GB: {sixteen:?}"
         );
+    }
+
+    #[test]
+    fn the_bound_holds_every_count() {
+        let bounds = Bounds::new([-1.5; 3], [1.5; 3]).unwrap();
+        for d in [3, 6, 9, 12] {
+            let s = MeshSettings::new(bounds, d);
+            let (count, bound) = (estimate(&sphere(), &s), estimate_bound(&s));
+            assert!(
+                count.blocks <= bound.blocks,
+                "depth {d}: {count:?} > {bound:?}"
+            );
+        }
+        // Depth 9: 32 blocks a side, 88 MiB at most, whatever the model.
+        let nine = estimate_bound(&MeshSettings::new(bounds, 9));
+        assert_eq!(nine.blocks, 32768.0);
+        assert!(nine.bytes < 100.0 * 1024.0 * 1024.0);
     }
 
     #[test]

@@ -46,7 +46,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use isoforge_field::{Bounds, ClippedField, Shape};
 
-pub use estimate::{Estimate, estimate};
+pub use estimate::{Estimate, estimate, estimate_bound};
 
 use crate::mesh::Mesh;
 use crate::sink::MeshSink;
