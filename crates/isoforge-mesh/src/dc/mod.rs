@@ -18,8 +18,9 @@
 //! 5. `stream.rs`: the schedule, slab by slab along z, polygons handed on as soon as
 //!    they are known;
 //! 6. `decimate.rs`: with a tolerance, edge collapses checked against the field (on
-//!    meshes of up to 65,536 triangles; larger ones go on unchanged), then the
-//!    [`MeshSink`].
+//!    meshes of up to 65,536 triangles; larger ones go on unchanged);
+//! 7. `refine.rs`: with a tolerance, vertices off the surface moved onto it and triangles
+//!    that cut a crease split along it, then the [`MeshSink`].
 //!
 //! Everything samples the field clipped to the region (`isoforge_field::ClippedField`:
 //! F = max(f, d_box), NaN = outside), so models cut by their region come out capped.
@@ -33,6 +34,7 @@ pub mod leaf;
 pub mod merge;
 pub mod octree;
 pub mod qef;
+pub mod refine;
 pub mod sampler;
 pub mod stream;
 pub mod topology;

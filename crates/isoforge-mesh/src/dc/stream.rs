@@ -20,6 +20,7 @@ use super::hermite::{self, Crossing, EdgeRef, Scratch};
 use super::leaf::{self, BlockInput, BlockOut, LeafScratch, Merging, NO_VERT};
 use super::merge::{AboveBlocks, Resolved};
 use super::octree::{Class, Grid, Octree};
+use super::refine::Refiner;
 use super::sampler::{EvalPool, Sampler};
 use super::{MeshError, MeshSettings, Reporter};
 use crate::sink::MeshSink;
@@ -41,7 +42,7 @@ struct Pass2Scratch {
 }
 
 /// Meshes a sampled field into a sink; with merging on, through the edge collapses of
-/// `decimate.rs`.
+/// `decimate.rs` and the splits of `refine.rs`.
 pub fn run<S: Sampler>(
     sampler: &S,
     settings: &MeshSettings,
@@ -55,7 +56,8 @@ pub fn run<S: Sampler>(
     let tolerance = settings
         .effective_tolerance()
         .min(settings.cell() * decimate::MAX_CELLS);
-    let mut decimator = Decimator::new(sampler, tolerance, sink);
+    let mut refiner = Refiner::new(sampler, tolerance, &settings.bounds, settings.cell(), sink);
+    let mut decimator = Decimator::new(sampler, tolerance, &mut refiner);
     contour_into(sampler, settings, merging, block_shift, &mut decimator)?;
     decimator.finish().map_err(MeshError::Write)
 }
