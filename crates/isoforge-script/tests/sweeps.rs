@@ -510,3 +510,46 @@ fn coons_patch_keeps_its_boundary() {
             .contains("coons_patch")
     );
 }
+
+/// A sweep an OpenSCAD user writes without `bounds(..)` finds its own region, tight around
+/// it: the twist, the scale and the helix once left every interval unbounded.
+#[test]
+fn twisted_scaled_shifted_and_spiral_sweeps_find_their_region() {
+    let cases = [
+        ("linear_sweep(rect([10, 10]), 20, #{twist: 90})", 7.08, 20.0),
+        ("linear_sweep(rect([10, 10]), 20, #{scale: 0.5})", 5.0, 20.0),
+        (
+            "linear_sweep(rect([10, 10]), 20, #{scale: [0.5, 2], twist: 45})",
+            11.0,
+            20.0,
+        ),
+        (
+            "linear_sweep(circle(3), 10, #{shift: [4, 0], center: true})",
+            7.0,
+            5.0,
+        ),
+        ("spiral_sweep(circle(1), 20, 5, 3)", 6.0, 11.0),
+        (
+            "textured_linear_sweep(circle(5), \"ribs\", 10, #{tex_size: [2, 2], tex_depth: 1, scale: 1.2})",
+            7.0,
+            10.0,
+        ),
+    ];
+    for (src, radius, top) in cases {
+        let found = isoforge_field::find_bounds(&shape(src))
+            .unwrap_or_else(|e| panic!("{src}: no region: {e}"));
+        // Near the solid: the search is by intervals (a texture's are loose), and a can a
+        // millimetre wider than the solid bounds the spiral.
+        let slack = 0.75 * radius;
+        for a in 0..2 {
+            assert!(
+                found.max[a] <= radius + slack && found.min[a] >= -radius - slack,
+                "{src}: {found:?}"
+            );
+        }
+        assert!(
+            found.max[2] >= top - 1e-6 && found.max[2] <= top + slack,
+            "{src}: {found:?}"
+        );
+    }
+}

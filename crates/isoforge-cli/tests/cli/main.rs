@@ -12,6 +12,7 @@ mod help;
 mod info;
 mod interop;
 mod mesh;
+mod openscad;
 mod outputs;
 mod peers;
 mod print;

@@ -14,6 +14,7 @@ pub mod skin;
 
 use std::f64::consts::TAU;
 
+use glam::DVec2;
 use isoforge_field::Shape;
 
 use crate::profile::{Profile, ProfileError};
@@ -118,6 +119,23 @@ impl LinearSweep {
         if self.center { -0.5 * self.height } else { 0.0 }
     }
 
+    /// `shape` (this sweep of a profile reaching `reach` from its origin, or something
+    /// within `reach` of such a sweep) cut by a cylinder about z that holds it: the same
+    /// surface, and a region the interval search can find. A twist turns x and y by an
+    /// angle that depends on z, and a scale divides by a factor that does, so over a box
+    /// reaching far in z their intervals say nothing, and `linear_sweep(square(10), 20,
+    /// #{twist: 90})` had no region unless the script gave one; the distance from the axis
+    /// does not depend on the turn at all.
+    pub fn bounded(&self, shape: Shape, reach: f64) -> Shape {
+        if self.twist == 0.0 && self.scale == [1.0, 1.0] && self.shift == [0.0, 0.0] {
+            return shape;
+        }
+        let grow = self.scale.iter().fold(1.0f64, |m, k| m.max(k.abs()));
+        let radius = DVec2::from(self.shift).length() + grow * reach;
+        // A millimetre and a thousandth beyond: the cylinder never touches the surface.
+        shape.max(&(radial() - (radius * 1.001 + 1.0)))
+    }
+
     fn check(&self) -> Result<(), SweepError> {
         positive("the height", self.height)?;
         finite("the twist", self.twist)?;
@@ -169,8 +187,12 @@ pub fn linear_coords(opts: &LinearSweep) -> Result<LinearCoords, SweepError> {
     } else {
         (px, py)
     };
-    let kx = 1.0 + &t * (opts.scale[0] - 1.0);
-    let ky = 1.0 + &t * (opts.scale[1] - 1.0);
+    // The scale's t is held to the sweep's own heights: beyond them the slab decides,
+    // and a factor that passes through 0 there made every interval of the sweep say
+    // nothing (no region could be found).
+    let held = t.max(&Shape::constant(0.0)).min(&Shape::constant(1.0));
+    let kx = 1.0 + &held * (opts.scale[0] - 1.0);
+    let ky = 1.0 + &held * (opts.scale[1] - 1.0);
     let k = if opts.scale[0] == opts.scale[1] {
         kx.clone()
     } else {
@@ -194,7 +216,7 @@ pub fn linear_sweep(profile: &Profile, opts: &LinearSweep) -> Result<Shape, Swee
     } else {
         profile.at(&c.u, &c.v) * &c.k
     };
-    Ok(side.max(&c.slab))
+    Ok(opts.bounded(side.max(&c.slab), profile.reach()))
 }
 
 /// The wedge of angles `0..angle` (degrees) about z, as a field: the intersection of two
@@ -359,7 +381,15 @@ pub fn spiral_sweep(profile: &Profile, opts: &SpiralSweep) -> Result<Shape, Swee
         });
     }
     // `candidates + 1 >= 1`, so there is at least one piece.
-    Ok(best.unwrap_or_else(|| Shape::constant(f64::INFINITY)))
+    let helix = best.unwrap_or_else(|| Shape::constant(f64::INFINITY));
+    // A can around it, a millimetre and a thousandth beyond (see `LinearSweep::bounded`:
+    // the angle's intervals say nothing far away, so without it a thread had no region).
+    // The profile's x is radial: ρ is within r + its x range; z is within the helix's
+    // height, the profile's y range and the tapers' extra turn.
+    let radius = r + b.max.x.abs().max(b.min.x.abs());
+    let half = 0.5 * h + ymax.abs().max(ymin.abs()) + extra * pitch / TAU;
+    let can = (&rho - (radius * 1.001 + 1.0)).max(&(z.abs() - (half * 1.001 + 1.0)));
+    Ok(helix.max(&can))
 }
 
 #[cfg(test)]

@@ -145,7 +145,10 @@ pub fn textured_linear_sweep(
         profile.at(&c.u, &c.v) * &c.k
     };
     let textured = side - tex.displacement(texture, &along, &up);
-    Ok(textured.max(&c.slab))
+    // The texture moves the side out by at most its depth and inset, in the scaled frame.
+    let grow = sweep.scale.iter().fold(1.0f64, |m, k| m.max(k.abs()));
+    let reach = profile.reach() + grow * (tex.depth.abs() + tex.inset.abs());
+    Ok(sweep.bounded(textured.max(&c.slab), reach))
 }
 
 /// `textured_cylinder(r, h, texture, #{..})`: a textured linear sweep of a circle,
