@@ -69,7 +69,7 @@ const SHORTEST: f64 = 1.0 / 16.0;
 /// pieces of an edge are at most three quarters of it and splitting ends.
 const MID_REACH: f64 = 0.5;
 
-/// Splits of splits at most: an edge of the mesher's becomes at most 2^4 pieces. What
+/// Splits of splits at most: an edge of the mesher's becomes at most 2^8 pieces. What
 /// makes splitting end: where the surface between two vertices is far from their chord (a
 /// thin wall seen edge-on), each new middle moved onto the surface can leave a chord as long
 /// as before, and levels bound that.
@@ -332,8 +332,8 @@ impl<'a, S: Sampler> Refiner<'a, S> {
                     g
                 }
             }
-            (Some(g), _) => g,
-            _ => return Ok(None),
+            (Some(one), None) | (None, Some(one)) => one,
+            (None, None) => return Ok(None),
         };
         // Too near an end, it would make a sliver (or, written as STL and read back, the
         // same point twice).
