@@ -220,3 +220,45 @@ fn the_knot_ring_renders() {
         "{surface} pixels"
     );
 }
+
+#[test]
+fn every_sweep_fixture_renders() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let all = models("sweeps");
+    assert_eq!(all.len(), 8);
+    for model in all {
+        let out = dir.path().join("out.png");
+        let run = isoforge(&[
+            "render",
+            s(&model),
+            "-o",
+            s(&out),
+            "--size",
+            "40x30",
+            "--quiet",
+        ]);
+        let name = model.display();
+        assert_eq!(
+            run.status.code(),
+            Some(0),
+            "{name}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let file = std::fs::File::open(&out).expect("PNG written");
+        let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+            .read_info()
+            .expect("a PNG");
+        let mut buf = vec![0; reader.output_buffer_size().expect("size")];
+        let info = reader.next_frame(&mut buf).expect("a frame");
+        buf.truncate(info.buffer_size());
+        assert_eq!((info.width, info.height), (40, 30), "{name}");
+        // The model is in the picture: some pixels are not the background's.
+        let channels = buf.len() / (40 * 30);
+        let background = buf[..channels].to_vec();
+        let surface = buf
+            .chunks_exact(channels)
+            .filter(|p| *p != background.as_slice())
+            .count();
+        assert!(surface >= 40 * 30 / 20, "{name}: {surface} pixels of surface");
+    }
+}
