@@ -259,6 +259,9 @@ fn every_sweep_fixture_renders() {
             .chunks_exact(channels)
             .filter(|p| *p != background.as_slice())
             .count();
-        assert!(surface >= 40 * 30 / 20, "{name}: {surface} pixels of surface");
+        assert!(
+            surface >= 40 * 30 / 20,
+            "{name}: {surface} pixels of surface"
+        );
     }
 }
