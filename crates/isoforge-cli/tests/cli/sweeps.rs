@@ -184,24 +184,26 @@ fn a_knurled_knob_slices_to_checked_gcode() {
     assert!(report.filament_mm > 100.0);
 }
 
-#[test]
-fn the_knot_ring_renders() {
+/// Renders `model` at `width` x `height` and counts the pixels that are not the
+/// background's (the first pixel's colour).
+fn surface_pixels(model: &Path, width: u32, height: u32) -> usize {
     let dir = tempfile::tempdir().expect("tempdir");
-    let out = dir.path().join("knot.png");
-    let model = fixtures().join("sweeps/knot_ring.rhai");
+    let out = dir.path().join("out.png");
+    let size = format!("{width}x{height}");
     let run = isoforge(&[
         "render",
-        s(&model),
+        s(model),
         "-o",
         s(&out),
         "--size",
-        "80x60",
+        &size,
         "--quiet",
     ]);
+    let name = model.display();
     assert_eq!(
         run.status.code(),
         Some(0),
-        "{}",
+        "{name}: {}",
         String::from_utf8_lossy(&run.stderr)
     );
     let file = std::fs::File::open(&out).expect("PNG written");
@@ -211,9 +213,17 @@ fn the_knot_ring_renders() {
     let mut buf = vec![0; reader.output_buffer_size().expect("size")];
     let info = reader.next_frame(&mut buf).expect("a frame");
     buf.truncate(info.buffer_size());
-    assert_eq!((info.width, info.height), (80, 60));
-    let background = buf[..3].to_vec();
-    let surface = buf.chunks_exact(3).filter(|p| *p != background).count();
+    assert_eq!((info.width, info.height), (width, height), "{name}");
+    let channels = buf.len() / (width * height) as usize;
+    let background = buf[..channels].to_vec();
+    buf.chunks_exact(channels)
+        .filter(|p| *p != background.as_slice())
+        .count()
+}
+
+#[test]
+fn the_knot_ring_renders() {
+    let surface = surface_pixels(&fixtures().join("sweeps/knot_ring.rhai"), 80, 60);
     // The knot's strands cover a fair part of the picture, not all of it (the hole).
     assert!(
         (80 * 60 / 10..80 * 60 * 9 / 10).contains(&surface),
@@ -223,45 +233,15 @@ fn the_knot_ring_renders() {
 
 #[test]
 fn every_sweep_fixture_renders() {
-    let dir = tempfile::tempdir().expect("tempdir");
     let all = models("sweeps");
     assert_eq!(all.len(), 8);
     for model in all {
-        let out = dir.path().join("out.png");
-        let run = isoforge(&[
-            "render",
-            s(&model),
-            "-o",
-            s(&out),
-            "--size",
-            "40x30",
-            "--quiet",
-        ]);
-        let name = model.display();
-        assert_eq!(
-            run.status.code(),
-            Some(0),
-            "{name}: {}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let file = std::fs::File::open(&out).expect("PNG written");
-        let mut reader = png::Decoder::new(std::io::BufReader::new(file))
-            .read_info()
-            .expect("a PNG");
-        let mut buf = vec![0; reader.output_buffer_size().expect("size")];
-        let info = reader.next_frame(&mut buf).expect("a frame");
-        buf.truncate(info.buffer_size());
-        assert_eq!((info.width, info.height), (40, 30), "{name}");
-        // The model is in the picture: some pixels are not the background's.
-        let channels = buf.len() / (40 * 30);
-        let background = buf[..channels].to_vec();
-        let surface = buf
-            .chunks_exact(channels)
-            .filter(|p| *p != background.as_slice())
-            .count();
+        // The model is in the picture.
+        let surface = surface_pixels(&model, 40, 30);
         assert!(
             surface >= 40 * 30 / 20,
-            "{name}: {surface} pixels of surface"
+            "{}: {surface} pixels of surface",
+            model.display()
         );
     }
 }

@@ -128,17 +128,6 @@ impl Vert {
     }
 }
 
-/// What the refiner did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RefineCounts {
-    /// Vertices moved onto the surface.
-    pub moved: u64,
-    /// Edges split.
-    pub splits: u64,
-    /// Triangles given a centre vertex.
-    pub centres: u64,
-}
-
 /// Moves vertices onto the surface and splits triangles that stray from it, on the way
 /// to `inner` (see the module doc).
 pub struct Refiner<'a, S: Sampler> {
@@ -164,8 +153,6 @@ pub struct Refiner<'a, S: Sampler> {
     older: HashSet<[u32; 3]>,
     /// The field narrowed to boxes near the latest vertices.
     locals: HashMap<[i64; 3], S::Local>,
-    /// What was done.
-    pub counts: RefineCounts,
 }
 
 impl<'a, S: Sampler> Refiner<'a, S> {
@@ -193,7 +180,6 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             recent: HashSet::new(),
             older: HashSet::new(),
             locals: HashMap::new(),
-            counts: RefineCounts::default(),
         }
     }
 
@@ -345,7 +331,6 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             return Ok(None);
         }
         let m = self.emit_vertex(q, n, level + 1)?;
-        self.counts.splits += 1;
         self.splits.insert(key, (m, 0));
         Ok(Some(m))
     }
@@ -396,7 +381,6 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         let Some((q, n)) = self.onto_surface(c, shortest * MID_REACH) else {
             return Ok(None);
         };
-        self.counts.centres += 1;
         let level = v.iter().map(|x| x.level).max().unwrap_or(0);
         self.emit_vertex(q, n, level + 1).map(Some)
     }
@@ -456,13 +440,7 @@ impl<S: Sampler> MeshSink for Refiner<'_, S> {
         let at = DVec3::from(p.map(f64::from));
         let (pos, normal) = match self.probe(at) {
             Some((_, n, d)) if d > self.tolerance * MOVE_SHARE => {
-                match self.onto_surface(at, REACH * self.cell) {
-                    Some((q, m)) => {
-                        self.counts.moved += 1;
-                        (q, m)
-                    }
-                    None => (at, n),
-                }
+                self.onto_surface(at, REACH * self.cell).unwrap_or((at, n))
             }
             Some((_, n, _)) => (at, n),
             None => (at, DVec3::ZERO),
