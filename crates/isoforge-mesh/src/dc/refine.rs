@@ -15,9 +15,9 @@
 //! So each vertex whose distance by the field (|F| / |∇F|) is over half the tolerance is
 //! moved onto the surface by Newton steps along the gradient, if that takes it less than
 //! [`REACH`] cells. Each edge whose middle is farther than [`SPLIT_SHARE`] of the tolerance
-//! from the surface is split: at its middle moved onto the surface the same way, or where
-//! two tangent planes meet (the crease, to first order: the ends' planes, or the plane where
-//! the middle landed with either end's), whichever leaves the straighter halves; a triangle whose edges all hold but
+//! from the surface is split: at its middle moved onto the surface the same way, or, where
+//! the ends' normals are far apart, where their tangent planes meet (the crease, to first
+//! order), whichever leaves the straighter halves; a triangle whose edges all hold but
 //! whose centre does not gets a vertex there. Splitting goes on in the pieces (longest
 //! split edge first, as in Rivara's bisection), at most [`MAX_SPLITS`] levels and down to
 //! edges of [`SHORTEST`] of a cell.
@@ -86,14 +86,6 @@ const CREASE_COS: f64 = 0.5;
 /// edge: a groove narrower than a cell is not seen by the lattice, and the polygons bridge
 /// it; its bottom can be several times deeper than the groove is wide where they do.
 const CREASE_REACH: f64 = 4.0;
-
-/// How far the crease point may move onto the surface, in lengths of the edge: where the
-/// faces curve, tangent planes meet up to a fraction of the distance off the true crease.
-const CREASE_SNAP: f64 = 0.5;
-
-/// A crease point farther than this many lengths of the edge from its middle must have
-/// halves that hold the tolerance along their length (`halves_hold`).
-const FAR_CREASE: f64 = 0.75;
 
 /// A new vertex nearer an end of its edge than this share of the edge is not made.
 const NEAR_END: f64 = 0.1;
@@ -235,28 +227,14 @@ impl<'a, S: Sampler> Refiner<'a, S> {
     /// `p` moved onto the surface by Newton steps along the gradient, with the unit
     /// gradient there; `None` if that does not bring it within a tenth of the tolerance
     /// within `reach` of where it started.
-    ///
-    /// Near a crease of a `max` or `min` the gradient is one branch's, and the branch in
-    /// charge changes from step to step: one branch at a time, Newton zigzags across the
-    /// crease and closes in slowly (by cos² of the angle between the faces per pair of steps;
-    /// on gyroid_sphere's sharp rims it had not arrived after six). Where the normal turns
-    /// past [`CREASE_COS`] between two steps, the step goes to where both branches' tangent
-    /// planes meet instead, which arrives in one or two.
     fn onto_surface(&mut self, p: DVec3, reach: f64) -> Option<(DVec3, DVec3)> {
         let mut q = p;
-        // The last step's value, gradient and point.
-        let mut last: Option<(f64, DVec3, DVec3)> = None;
         for _ in 0..NEWTON_STEPS {
             let (f, n, d) = self.probe(q)?;
             if d <= self.tolerance * 0.1 {
                 return ((q - p).length() <= reach).then_some((q, n));
             }
-            let g = n * (f.abs() / d);
-            let step = last
-                .filter(|(_, gl, _)| n.dot(gl.normalize()) < CREASE_COS)
-                .and_then(|(fl, gl, ql)| both_planes_step(f, g, fl + gl.dot(q - ql), gl));
-            last = Some((f, g, q));
-            q += step.unwrap_or(-n * (f.signum() * d));
+            q -= n * (f.signum() * d);
             if (q - p).length() > reach {
                 return None;
             }
@@ -332,36 +310,20 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         }
         let reach = len * MID_REACH;
         let along = self.onto_surface(mid, reach);
-        // Where tangent planes meet: the ends' (a crease between them), and, when one end
-        // sits on the crease itself and has the same face's normal as the other, the
-        // plane where the middle landed with each end's.
-        let mut planes = vec![(pa, va.normal()), (pb, vb.normal())];
-        planes.extend(along);
-        let pairs: &[(usize, usize)] = if planes.len() == 3 {
-            &[(0, 1), (0, 2), (2, 1)]
-        } else {
-            &[(0, 1)]
-        };
-        let mut best = along.map(|g| (self.halves_error(pa, pb, g.0), g));
-        for &(i, j) in pairs {
-            let Some(x) = crease_point(planes[i], planes[j], mid)
-                .filter(|x| (*x - mid).length() <= len * CREASE_REACH)
-            else {
-                continue;
-            };
-            let Some(c) = self.onto_surface(x, len * CREASE_SNAP) else {
-                continue;
-            };
-            if (c.0 - mid).length() > len * FAR_CREASE && !self.halves_hold(pa, pb, c.0) {
-                continue;
+        let crease = crease_point(&va, &vb, mid)
+            .filter(|x| (*x - mid).length() <= len * CREASE_REACH)
+            .and_then(|x| self.onto_surface(x, reach * 0.25));
+        let (q, n) = match (along, crease) {
+            (Some(g), Some(c)) => {
+                // The one that leaves the straighter halves.
+                if self.halves_error(pa, pb, c.0) < self.halves_error(pa, pb, g.0) {
+                    c
+                } else {
+                    g
+                }
             }
-            let e = self.halves_error(pa, pb, c.0);
-            if best.is_none_or(|(b, _)| e < b) {
-                best = Some((e, c));
-            }
-        }
-        let Some((_, (q, n))) = best else {
-            return Ok(None);
+            (Some(one), None) | (None, Some(one)) => one,
+            (None, None) => return Ok(None),
         };
         // Too near an end, it would make a sliver (or, written as STL and read back, the
         // same point twice).
@@ -381,23 +343,6 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             worst = worst.max(self.probe(p).map_or(f64::INFINITY, |x| x.2));
         }
         worst
-    }
-
-    /// Whether the halves of `a`–`b` split at `m` keep within the split threshold at their
-    /// quarters: a crease point far from the edge is taken only if its halves lie on the
-    /// surface, not just their middles (on a sheet a cell thick, tangent planes a few cells
-    /// apart meet where there is no crease, and such splits folded gyroid_sphere at depth 5
-    /// into 1.16 of its volume).
-    fn halves_hold(&mut self, a: DVec3, b: DVec3, m: DVec3) -> bool {
-        for (u, v) in [(a, m), (m, b)] {
-            for t in [0.25, 0.75] {
-                let d = self.probe(u.lerp(v, t)).map_or(f64::INFINITY, |x| x.2);
-                if d > self.tolerance * SPLIT_SHARE {
-                    return false;
-                }
-            }
-        }
-        true
     }
 
     /// Records that one side has been divided at the split edge `a`–`b`; the second side
@@ -473,33 +418,18 @@ impl<'a, S: Sampler> Refiner<'a, S> {
     }
 }
 
-/// The step from a point, in the plane of two gradients, to where two linear functions
-/// with values `f1`, `f2` there and gradients `g1`, `g2` are both zero; `None` when the
-/// gradients are too near parallel to say.
-fn both_planes_step(f1: f64, g1: DVec3, f2: f64, g2: DVec3) -> Option<DVec3> {
-    let (a11, a12, a22) = (g1.dot(g1), g1.dot(g2), g2.dot(g2));
-    let det = a11 * a22 - a12 * a12;
-    // Written so that a NaN determinant says no, too.
-    if det.partial_cmp(&(0.05 * a11 * a22)) != Some(std::cmp::Ordering::Greater) {
-        return None;
-    }
-    // step = α·g1 + β·g2 with g1·step = −f1 and g2·step = −f2.
-    let alpha = (-f1 * a22 + a12 * f2) / det;
-    let beta = (-f2 * a11 + a12 * f1) / det;
-    Some(g1 * alpha + g2 * beta)
-}
-
-/// Where two tangent planes (a point and its unit normal) on either side of a crease meet,
-/// nearest to `mid`: the crease, to first order (as dual contouring's QEF finds it in a
-/// cell). `None` when the planes are too near parallel to say.
-fn crease_point((pa, na): (DVec3, DVec3), (pb, nb): (DVec3, DVec3), mid: DVec3) -> Option<DVec3> {
+/// Where the tangent planes at two vertices on either side of a crease meet, nearest to
+/// `mid`: the crease, to first order (as dual contouring's QEF finds it in a cell). `None`
+/// when the planes are too near parallel to say.
+fn crease_point(a: &Vert, b: &Vert, mid: DVec3) -> Option<DVec3> {
+    let (na, nb) = (a.normal(), b.normal());
     let c = na.dot(nb);
     let det = 1.0 - c * c;
     if na == DVec3::ZERO || nb == DVec3::ZERO || c > CREASE_COS || det < 0.05 {
         return None;
     }
     // mid + α·na + β·nb on both planes.
-    let (ra, rb) = (-na.dot(mid - pa), -nb.dot(mid - pb));
+    let (ra, rb) = (-na.dot(mid - a.at()), -nb.dot(mid - b.at()));
     let alpha = (ra - c * rb) / det;
     let beta = (rb - c * ra) / det;
     Some(mid + na * alpha + nb * beta)
@@ -533,7 +463,6 @@ impl<S: Sampler> MeshSink for Refiner<'_, S> {
 
 #[cfg(test)]
 mod tests {
-    use glam::DVec3;
     use isoforge_field::{Bounds, ClippedField, Shape};
 
     use super::Refiner;
@@ -602,27 +531,6 @@ mod tests {
             check(&out).problems()
         );
         assert!(out.triangles.len() > uniform.triangles.len());
-    }
-
-    #[test]
-    fn newton_arrives_at_the_edge_of_a_sharp_wedge() {
-        // max(y − tan(20°)·x, −y − tan(20°)·x): a wedge 40° wide about the x axis, its
-        // edge on the z axis. From a point outside, just beyond the edge, one branch at a
-        // time zigzags between the faces (cos² 40° ≈ 0.59 closer per pair of steps).
-        let (x, y) = (Shape::x(), Shape::y());
-        let t = 20f64.to_radians().tan();
-        let wedge = (&y - &x * t).max(&(-&y - &x * t));
-        let bounds = Bounds::new([-1.0; 3], [1.0; 3]).unwrap();
-        let sampler = TapeSampler::new(ClippedField::new(&wedge, bounds));
-        let mut out = Mesh::default();
-        let tolerance = 1e-4;
-        let mut refiner = Refiner::new(&sampler, tolerance, &bounds, 0.1, &mut out);
-        let start = DVec3::new(-0.05, 0.001, 0.3);
-        let (q, _) = refiner.onto_surface(start, 0.2).expect("arrives");
-        let d = q.y.abs() - q.x * t;
-        assert!(d.abs() < tolerance, "{q:?} is {d} off");
-        // And it is the edge, not a point of a face far from it.
-        assert!(q.x.abs() < 0.002 && q.y.abs() < 0.002, "{q:?}");
     }
 
     #[test]
