@@ -47,12 +47,38 @@ pub struct Deviation {
     /// Of those, points whose distance is the first-order estimate (no sign change found
     /// on the gradient line nearby).
     pub estimated: usize,
+    /// With a tolerance (`deviation_beyond`): the share of the mesh's area farther from
+    /// the surface than it (by the quadrature weights of its sample points), 0 to 1.
+    pub area_beyond: f64,
+    /// With a tolerance: the sample points farther than it.
+    pub points_beyond: usize,
+    /// With a tolerance: whether every point counted beyond it was searched around (see
+    /// `refine_largest`); if not, the counts beyond are upper bounds.
+    pub beyond_exact: bool,
+}
+
+impl Deviation {
+    /// Whether the mesh keeps within `tolerance` of the surface everywhere sampled.
+    pub fn holds(&self, tolerance: f64) -> bool {
+        self.max <= tolerance
+    }
 }
 
 /// The distance from the mesh to the field's surface (see the module doc).
 pub fn deviation(mesh: &Mesh, field: &ClippedField) -> Deviation {
+    deviation_beyond(mesh, field, f64::INFINITY)
+}
+
+/// As [`deviation`], and how much of the mesh is farther than `tolerance` from the surface
+/// (`area_beyond`, `points_beyond`): every sample point whose first distance is over it is
+/// searched around, so those it counts are truly over (up to a limit of points searched;
+/// `beyond_exact` says whether it was reached).
+pub fn deviation_beyond(mesh: &Mesh, field: &ClippedField, tolerance: f64) -> Deviation {
     if !mesh.has_valid_indices() || mesh.triangles.is_empty() {
-        return Deviation::default();
+        return Deviation {
+            beyond_exact: true,
+            ..Deviation::default()
+        };
     }
     // Sample points, seven per triangle: corners, edge middles, centroid.
     let points: Vec<[f64; 3]> = mesh
@@ -76,7 +102,7 @@ pub fn deviation(mesh: &Mesh, field: &ClippedField) -> Deviation {
         .par_chunks(CHUNK)
         .flat_map_iter(|chunk| distances(field, chunk))
         .collect();
-    refine_largest(field, &points, &mut found);
+    let beyond_exact = refine_largest(field, &points, &mut found, tolerance);
     // Degree-3 rule on a triangle: corners 3/60, edge middles 8/60, centroid 27/60.
     const WEIGHTS: [f64; 7] = [
         3.0 / 60.0,
@@ -89,9 +115,10 @@ pub fn deviation(mesh: &Mesh, field: &ClippedField) -> Deviation {
     ];
     let mut out = Deviation {
         samples: found.len(),
+        beyond_exact,
         ..Deviation::default()
     };
-    let (mut weighted, mut area) = (0.0, 0.0);
+    let (mut weighted, mut area, mut beyond) = (0.0, 0.0, 0.0);
     for (ti, &t) in mesh.triangles.iter().enumerate() {
         let [a, b, c] = mesh.corners(t);
         let twice = (b - a).cross(c - a).length();
@@ -100,6 +127,10 @@ pub fn deviation(mesh: &Mesh, field: &ClippedField) -> Deviation {
             let (d, estimated) = found[7 * ti + k];
             out.estimated += usize::from(estimated);
             sum += WEIGHTS[k] * d;
+            if d > tolerance {
+                out.points_beyond += 1;
+                beyond += WEIGHTS[k] * twice;
+            }
             if d > out.max {
                 out.max = d;
                 out.at = points[7 * ti + k];
@@ -109,6 +140,7 @@ pub fn deviation(mesh: &Mesh, field: &ClippedField) -> Deviation {
         area += twice;
     }
     out.mean = if area > 0.0 { weighted / area } else { 0.0 };
+    out.area_beyond = if area > 0.0 { beyond / area } else { 0.0 };
     out
 }
 
@@ -126,8 +158,15 @@ const REFINE_LIMIT: usize = 50_000;
 /// distance found is an upper bound (a point of the surface that far away was found), so
 /// the points are taken largest first and searched around in many directions for a nearer
 /// sign change; once the largest distance left is one already searched, it is the
-/// maximum.
-fn refine_largest(field: &ClippedField, points: &[[f64; 3]], found: &mut [(f64, bool)]) {
+/// maximum. Points over `floor` are all searched (so that a count of points beyond a
+/// tolerance counts none the search would have brought under it); returns false if the
+/// limit on points searched ended that first.
+fn refine_largest(
+    field: &ClippedField,
+    points: &[[f64; 3]],
+    found: &mut [(f64, bool)],
+    floor: f64,
+) -> bool {
     use std::cmp::Ordering;
     use std::collections::BinaryHeap;
     #[derive(PartialEq)]
@@ -163,8 +202,14 @@ fn refine_largest(field: &ClippedField, points: &[[f64; 3]], found: &mut [(f64, 
     let (mut xs, mut ys, mut zs, mut f) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut searched = 0;
     while let Some(Item(d, i, done)) = heap.pop() {
-        if done || searched == REFINE_LIMIT {
-            break;
+        if done {
+            if d <= floor {
+                break;
+            }
+            continue;
+        }
+        if searched == REFINE_LIMIT {
+            return d <= floor;
         }
         searched += 1;
         let p = DVec3::from(points[i]);
@@ -217,6 +262,7 @@ fn refine_largest(field: &ClippedField, points: &[[f64; 3]], found: &mut [(f64, 
         found[i] = (nearer, found[i].1 && nearer >= d);
         heap.push(Item(nearer, i, true));
     }
+    true
 }
 
 /// The distance to the surface of each point, and whether it is the first-order estimate.
@@ -386,5 +432,17 @@ mod tests {
         assert!(d.mean > 0.0 && d.mean < d.max);
         assert_eq!(d.samples, 56);
         assert_eq!(d.estimated, 0);
+        // The share of the area beyond a tolerance, by the sample points' weights: past
+        // every point nothing; at 0 all but the corners (3 × 3/60 of each face); between
+        // the edge middles (1 − 1/√2 off) and the centroids, the centroids alone (27/60).
+        let field = ClippedField::new(&ball, region);
+        let over = |t: f64| deviation_beyond(&mesh, &field, t);
+        assert_eq!((over(0.5).area_beyond, over(0.5).points_beyond), (0.0, 0));
+        assert!(over(0.5).holds(0.5) && !over(0.35).holds(0.35));
+        assert!((over(0.0).area_beyond - 51.0 / 60.0).abs() < 1e-9);
+        assert_eq!(over(0.0).points_beyond, 32);
+        assert!((over(0.35).area_beyond - 27.0 / 60.0).abs() < 1e-9);
+        assert_eq!(over(0.35).points_beyond, 8);
+        assert!(over(0.35).beyond_exact);
     }
 }

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 use isoforge_field::ClippedField;
-use isoforge_mesh::{Deviation, MeshReport, check, deviation, read_mesh};
+use isoforge_mesh::{Deviation, MeshReport, check, deviation_beyond, read_mesh};
 use serde_json::json;
 
 use crate::common::{Global, ModelArgs, print_json};
@@ -16,8 +16,8 @@ use crate::common::{Global, ModelArgs, print_json};
 /// Arguments of `isoforge check`.
 #[derive(Args, Debug)]
 #[command(
-    after_help = "Exit status: 0 closed and manifold, 1 not (the report says why), \
-                        2 the file cannot be read."
+    after_help = "Exit status: 0 closed and manifold (and, with --tolerance, within it), \
+                        1 not (the report says why), 2 the file cannot be read."
 )]
 pub struct CheckArgs {
     /// The mesh file: STL (binary or ASCII), 3MF, OBJ or PLY; or a G-code file (.gcode),
@@ -39,6 +39,19 @@ pub struct CheckArgs {
         requires = "against"
     )]
     pub bounds: Option<String>,
+    /// With --against: the largest distance allowed (as `mesh --tolerance` takes it, in
+    /// model units): the report says whether the mesh keeps within it and how much of its
+    /// area does not, and the exit status is 1 if it does not.
+    #[arg(long, value_name = "MM", requires = "against", value_parser = parse_tolerance)]
+    pub tolerance: Option<f64>,
+}
+
+/// A tolerance: a finite number, 0 or more.
+fn parse_tolerance(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(t) if t.is_finite() && t >= 0.0 => Ok(t),
+        _ => Err(format!("'{s}' is not a distance (a number, 0 or more)")),
+    }
 }
 
 /// Runs the command.
@@ -76,7 +89,14 @@ pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
         None => None,
     };
     let report = check(&mesh);
-    let dev = field.as_ref().map(|f| deviation(&mesh, f));
+    let tolerance = args.tolerance;
+    let dev = field
+        .as_ref()
+        .map(|f| deviation_beyond(&mesh, f, tolerance.unwrap_or(f64::INFINITY)));
+    let held = match (dev, tolerance) {
+        (Some(d), Some(t)) => d.holds(t),
+        _ => true,
+    };
     let name = args.mesh.display().to_string();
     if global.json {
         let mut j = report_json(&name, &report);
@@ -85,15 +105,24 @@ pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
             obj.insert("mean_deviation".into(), json!(d.mean));
             obj.insert("max_deviation_at".into(), json!(d.at));
             obj.insert("deviation_samples".into(), json!(d.samples));
+            if let Some(t) = tolerance {
+                obj.insert("tolerance".into(), json!(t));
+                obj.insert("tolerance_held".into(), json!(held));
+                obj.insert("area_beyond_tolerance".into(), json!(d.area_beyond));
+                obj.insert("points_beyond_tolerance".into(), json!(d.points_beyond));
+            }
         }
         print_json(&j);
     } else if !global.quiet {
         print!("{}", report_text(&name, &report));
         if let Some(d) = dev {
             print!("{}", deviation_text(&d));
+            if let Some(t) = tolerance {
+                print!("{}", tolerance_text(&d, t));
+            }
         }
     }
-    Ok(if report.is_closed_manifold() {
+    Ok(if report.is_closed_manifold() && held {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
@@ -191,6 +220,22 @@ fn deviation_text(d: &Deviation) -> String {
         d.mean,
         d.samples
     )
+}
+
+/// The tolerance row: held, or how much is beyond it.
+fn tolerance_text(d: &Deviation, t: f64) -> String {
+    let verdict = if d.holds(t) {
+        "held".to_string()
+    } else {
+        format!(
+            "NOT held: {}{:.4} % of the area ({} of {} points) farther",
+            if d.beyond_exact { "" } else { "at most " },
+            100.0 * d.area_beyond,
+            d.points_beyond,
+            d.samples
+        )
+    };
+    format!("  {:<24}{t:.6} mm: {verdict}\n", "tolerance")
 }
 
 fn yes_no(b: bool) -> String {
