@@ -15,18 +15,21 @@
 //! So each vertex whose distance by the field (|F| / |∇F|) is over half the tolerance is
 //! moved onto the surface by Newton steps along the gradient, if that takes it less than
 //! [`REACH`] cells. Each edge whose middle is farther than [`SPLIT_SHARE`] of the tolerance
-//! from the surface is split: at its middle moved onto the surface the same way, or, where
-//! the ends' normals are far apart, where their tangent planes meet (the crease, to first
-//! order), whichever leaves the straighter halves; a triangle whose edges all hold but
-//! whose centre does not gets a vertex there. Splitting goes on in the pieces (longest
-//! split edge first, as in Rivara's bisection), at most [`MAX_SPLITS`] levels and down to
-//! edges of [`SHORTEST`] of a cell.
+//! from the surface is split: at its middle moved onto the surface the same way, or where
+//! two tangent planes meet (the crease, to first order: the ends' planes, or the plane where
+//! the middle landed with either end's), whichever leaves the straighter halves and is
+//! neither near an end nor within [`APART`] cells of another new vertex; a triangle whose
+//! edges all hold but whose centre does not gets a vertex there. Splitting goes on in the
+//! pieces (longest split edge first, as in Rivara's bisection), at most [`MAX_SPLITS`]
+//! levels and down to edges of [`SHORTEST`] of a cell.
 //!
-//! Why the mesh stays closed and manifold: whether and where an edge splits depends on the
-//! edge alone (its two end vertices), so the two triangles beside it split it the same way
-//! and share the new vertex (kept in a map until both have used it); a centre vertex is
-//! inside one triangle. Only positions of the mesher's vertices change, never which
-//! triangles they belong to.
+//! Why the mesh stays closed and manifold: whether and where an edge splits is decided
+//! once, when the first triangle beside it asks, and the second reads the answer: a split's
+//! new vertex is kept in a map until both sides have used it. A "no" depends on the edge
+//! alone (its two end vertices) and gives the same answer when asked again, except where it
+//! came from another new vertex nearby (which the second side might not see): that "no" is
+//! kept until both sides have written the edge. A centre vertex is inside one triangle.
+//! Only positions of the mesher's vertices change, never which triangles they belong to.
 //!
 //! What it costs: one gradient per vertex, and one per edge whose ends' normals say a chord
 //! there could be off by a quarter of the tolerance (a circular arc of chord `l` whose
@@ -86,6 +89,19 @@ const CREASE_COS: f64 = 0.5;
 /// edge: a groove narrower than a cell is not seen by the lattice, and the polygons bridge
 /// it; its bottom can be several times deeper than the groove is wide where they do.
 const CREASE_REACH: f64 = 4.0;
+
+/// How far the crease point may move onto the surface, in lengths of the edge: where the
+/// faces curve, tangent planes meet up to a fraction of the distance off the true crease.
+const CREASE_SNAP: f64 = 0.5;
+
+/// A crease point farther than this many lengths of the edge from its middle must have
+/// halves that hold the tolerance along their length (`halves_hold`).
+const FAR_CREASE: f64 = 0.75;
+
+/// Two new vertices are kept at least this many cells apart: where they land a hair apart
+/// (two edges' splits onto one straight crease), every way of joining the pieces has a
+/// needle, whose normal single-precision readers get wrong (ADMesh "fixed" them).
+const APART: f64 = 1.0 / 32.0;
 
 /// A new vertex nearer an end of its edge than this share of the edge is not made.
 const NEAR_END: f64 = 0.1;
@@ -148,6 +164,13 @@ pub struct Refiner<'a, S: Sampler> {
     /// Split edges (lower, higher output index) that not both sides have used yet: the
     /// middle vertex, and how many sides have.
     splits: HashMap<(u32, u32), (u32, u8)>,
+    /// Edges left whole because every place to split them was a hair from another new
+    /// vertex (a decision that depends on more than the edge, so it is kept until both
+    /// sides have written the edge): how many have.
+    refused: HashMap<(u32, u32), u8>,
+    /// New (split) vertices by grid square of [`APART`] cells, latest and older.
+    near: HashMap<[i64; 3], Vec<u32>>,
+    near_older: HashMap<[i64; 3], Vec<u32>>,
     /// Positions of the latest vertices, and of those before them.
     recent: HashSet<[u32; 3]>,
     older: HashSet<[u32; 3]>,
@@ -177,6 +200,9 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             verts: Vec::new(),
             remap: Vec::new(),
             splits: HashMap::new(),
+            refused: HashMap::new(),
+            near: HashMap::new(),
+            near_older: HashMap::new(),
             recent: HashSet::new(),
             older: HashSet::new(),
             locals: HashMap::new(),
@@ -227,14 +253,28 @@ impl<'a, S: Sampler> Refiner<'a, S> {
     /// `p` moved onto the surface by Newton steps along the gradient, with the unit
     /// gradient there; `None` if that does not bring it within a tenth of the tolerance
     /// within `reach` of where it started.
+    ///
+    /// Near a crease of a `max` or `min` the gradient is one branch's, and the branch in
+    /// charge changes from step to step: one branch at a time, Newton zigzags across the
+    /// crease and closes in slowly (by cos² of the angle between the faces per pair of steps;
+    /// on gyroid_sphere's sharp rims it had not arrived after six). Where the normal turns
+    /// past [`CREASE_COS`] between two steps, the step goes to where both branches' tangent
+    /// planes meet instead, which arrives in one or two.
     fn onto_surface(&mut self, p: DVec3, reach: f64) -> Option<(DVec3, DVec3)> {
         let mut q = p;
+        // The last step's value, gradient and point.
+        let mut last: Option<(f64, DVec3, DVec3)> = None;
         for _ in 0..NEWTON_STEPS {
             let (f, n, d) = self.probe(q)?;
             if d <= self.tolerance * 0.1 {
                 return ((q - p).length() <= reach).then_some((q, n));
             }
-            q -= n * (f.signum() * d);
+            let g = n * (f.abs() / d);
+            let step = last
+                .filter(|(_, gl, _)| n.dot(gl.normalize()) < CREASE_COS)
+                .and_then(|(fl, gl, ql)| both_planes_step(f, g, fl + gl.dot(q - ql), gl));
+            last = Some((f, g, q));
+            q += step.unwrap_or(-n * (f.signum() * d));
             if (q - p).length() > reach {
                 return None;
             }
@@ -291,6 +331,9 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         if let Some(&(m, _)) = self.splits.get(&key) {
             return Ok(Some(m));
         }
+        if self.refused.contains_key(&key) {
+            return Ok(None);
+        }
         self.decide_split(key)
     }
 
@@ -310,29 +353,118 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         }
         let reach = len * MID_REACH;
         let along = self.onto_surface(mid, reach);
-        let crease = crease_point(&va, &vb, mid)
-            .filter(|x| (*x - mid).length() <= len * CREASE_REACH)
-            .and_then(|x| self.onto_surface(x, reach * 0.25));
-        let (q, n) = match (along, crease) {
-            (Some(g), Some(c)) => {
-                // The one that leaves the straighter halves.
-                if self.halves_error(pa, pb, c.0) < self.halves_error(pa, pb, g.0) {
-                    c
-                } else {
-                    g
-                }
-            }
-            (Some(one), None) | (None, Some(one)) => one,
-            (None, None) => return Ok(None),
+        // Where tangent planes meet: the ends' (a crease between them), and, when one end
+        // sits on the crease itself and has the same face's normal as the other, the
+        // plane where the middle landed with each end's.
+        let mut planes = vec![(pa, va.normal()), (pb, vb.normal())];
+        planes.extend(along);
+        let pairs: &[(usize, usize)] = if planes.len() == 3 {
+            &[(0, 1), (0, 2), (2, 1)]
+        } else {
+            &[(0, 1)]
         };
-        // Too near an end, it would make a sliver (or, written as STL and read back, the
-        // same point twice).
-        if (q - pa).length().min((q - pb).length()) < len * NEAR_END {
-            return Ok(None);
+        // Each candidate with its halves' error, the straightest first.
+        let mut candidates: Vec<(f64, (DVec3, DVec3))> = Vec::new();
+        if let Some(g) = along {
+            candidates.push((self.halves_error(pa, pb, g.0), g));
         }
+        for &(i, j) in pairs {
+            let Some(x) = crease_point(planes[i], planes[j], mid)
+                .filter(|x| (*x - mid).length() <= len * CREASE_REACH)
+            else {
+                continue;
+            };
+            let Some(c) = self.onto_surface(x, len * CREASE_SNAP) else {
+                continue;
+            };
+            if (c.0 - mid).length() > len * FAR_CREASE && !self.halves_hold(pa, pb, c.0) {
+                continue;
+            }
+            candidates.push((self.halves_error(pa, pb, c.0), c));
+        }
+        candidates.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let mut crowded = false;
+        let mut chosen = None;
+        for &(_, (q, n)) in &candidates {
+            // Too near an end, it would make a sliver (or, written as STL and read back,
+            // the same point twice).
+            if (q - pa).length().min((q - pb).length()) < len * NEAR_END {
+                continue;
+            }
+            if self.crowded(q) {
+                crowded = true;
+                continue;
+            }
+            chosen = Some((q, n));
+            break;
+        }
+        let Some((q, n)) = chosen else {
+            if crowded {
+                self.refused.insert(key, 0);
+            }
+            return Ok(None);
+        };
         let m = self.emit_vertex(q, n, level + 1)?;
+        self.remember_near(m, q);
         self.splits.insert(key, (m, 0));
         Ok(Some(m))
+    }
+
+    /// The grid square of `p` for [`Refiner::near`].
+    fn square(&self, p: DVec3) -> Option<[i64; 3]> {
+        let key = (p / (APART * self.cell)).floor();
+        (key.is_finite() && key.abs().max_element() < 1e15).then(|| key.as_i64vec3().to_array())
+    }
+
+    /// Whether a new vertex at `q` would be within [`APART`] cells of another new vertex.
+    fn crowded(&self, q: DVec3) -> bool {
+        let Some(k) = self.square(q) else {
+            return false;
+        };
+        let apart = APART * self.cell;
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let key = [k[0] + dx, k[1] + dy, k[2] + dz];
+                    for map in [&self.near, &self.near_older] {
+                        let Some(ids) = map.get(&key) else { continue };
+                        if ids
+                            .iter()
+                            .any(|&i| (self.verts[i as usize].at() - q).length() < apart)
+                        {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    /// Files new vertex `m` at `q` for [`Refiner::crowded`].
+    fn remember_near(&mut self, m: u32, q: DVec3) {
+        let Some(k) = self.square(q) else { return };
+        if self.near.len() >= RECENT_KEPT {
+            self.near_older = std::mem::take(&mut self.near);
+        }
+        self.near.entry(k).or_default().push(m);
+    }
+
+    /// Counts the sides written of refused edges among `t`'s; the second frees them.
+    fn written(&mut self, t: [u32; 3]) {
+        if self.refused.is_empty() {
+            return;
+        }
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let key = (a.min(b), a.max(b));
+            if let Some(n) = self.refused.get_mut(&key) {
+                *n += 1;
+                if *n >= 2 {
+                    self.refused.remove(&key);
+                }
+            }
+        }
     }
 
     /// How far the middles of the two halves of `a`–`b` split at `m` are from the surface
@@ -343,6 +475,23 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             worst = worst.max(self.probe(p).map_or(f64::INFINITY, |x| x.2));
         }
         worst
+    }
+
+    /// Whether the halves of `a`–`b` split at `m` keep within the split threshold at their
+    /// quarters: a crease point far from the edge is taken only if its halves lie on the
+    /// surface, not just their middles (on a sheet a cell thick, tangent planes a few cells
+    /// apart meet where there is no crease, and such splits folded gyroid_sphere at depth 5
+    /// into 1.16 of its volume).
+    fn halves_hold(&mut self, a: DVec3, b: DVec3, m: DVec3) -> bool {
+        for (u, v) in [(a, m), (m, b)] {
+            for t in [0.25, 0.75] {
+                let d = self.probe(u.lerp(v, t)).map_or(f64::INFINITY, |x| x.2);
+                if d > self.tolerance * SPLIT_SHARE {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// Records that one side has been divided at the split edge `a`–`b`; the second side
@@ -413,23 +562,39 @@ impl<'a, S: Sampler> Refiner<'a, S> {
                 return Ok(());
             }
         }
+        self.written(t);
         let corners = t.map(|i| self.verts[i as usize].pos);
         self.inner.triangle(t, corners)
     }
 }
 
-/// Where the tangent planes at two vertices on either side of a crease meet, nearest to
-/// `mid`: the crease, to first order (as dual contouring's QEF finds it in a cell). `None`
-/// when the planes are too near parallel to say.
-fn crease_point(a: &Vert, b: &Vert, mid: DVec3) -> Option<DVec3> {
-    let (na, nb) = (a.normal(), b.normal());
+/// The step from a point, in the plane of two gradients, to where two linear functions
+/// with values `f1`, `f2` there and gradients `g1`, `g2` are both zero; `None` when the
+/// gradients are too near parallel to say.
+fn both_planes_step(f1: f64, g1: DVec3, f2: f64, g2: DVec3) -> Option<DVec3> {
+    let (a11, a12, a22) = (g1.dot(g1), g1.dot(g2), g2.dot(g2));
+    let det = a11 * a22 - a12 * a12;
+    // Written so that a NaN determinant says no, too.
+    if det.partial_cmp(&(0.05 * a11 * a22)) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    // step = α·g1 + β·g2 with g1·step = −f1 and g2·step = −f2.
+    let alpha = (-f1 * a22 + a12 * f2) / det;
+    let beta = (-f2 * a11 + a12 * f1) / det;
+    Some(g1 * alpha + g2 * beta)
+}
+
+/// Where two tangent planes (a point and its unit normal) on either side of a crease meet,
+/// nearest to `mid`: the crease, to first order (as dual contouring's QEF finds it in a
+/// cell). `None` when the planes are too near parallel to say.
+fn crease_point((pa, na): (DVec3, DVec3), (pb, nb): (DVec3, DVec3), mid: DVec3) -> Option<DVec3> {
     let c = na.dot(nb);
     let det = 1.0 - c * c;
     if na == DVec3::ZERO || nb == DVec3::ZERO || c > CREASE_COS || det < 0.05 {
         return None;
     }
     // mid + α·na + β·nb on both planes.
-    let (ra, rb) = (-na.dot(mid - a.at()), -nb.dot(mid - b.at()));
+    let (ra, rb) = (-na.dot(mid - pa), -nb.dot(mid - pb));
     let alpha = (ra - c * rb) / det;
     let beta = (rb - c * ra) / det;
     Some(mid + na * alpha + nb * beta)
@@ -463,6 +628,7 @@ impl<S: Sampler> MeshSink for Refiner<'_, S> {
 
 #[cfg(test)]
 mod tests {
+    use glam::DVec3;
     use isoforge_field::{Bounds, ClippedField, Shape};
 
     use super::Refiner;
@@ -531,6 +697,63 @@ mod tests {
             check(&out).problems()
         );
         assert!(out.triangles.len() > uniform.triangles.len());
+    }
+
+    #[test]
+    fn newton_arrives_at_the_edge_of_a_sharp_wedge() {
+        // max(y − tan(20°)·x, −y − tan(20°)·x): a wedge 40° wide about the x axis, its
+        // edge on the z axis. From a point outside, just beyond the edge, one branch at a
+        // time zigzags between the faces (cos² 40° ≈ 0.59 closer per pair of steps).
+        let (x, y) = (Shape::x(), Shape::y());
+        let t = 20f64.to_radians().tan();
+        let wedge = (&y - &x * t).max(&(-&y - &x * t));
+        let bounds = Bounds::new([-1.0; 3], [1.0; 3]).unwrap();
+        let sampler = TapeSampler::new(ClippedField::new(&wedge, bounds));
+        let mut out = Mesh::default();
+        let tolerance = 1e-4;
+        let mut refiner = Refiner::new(&sampler, tolerance, &bounds, 0.1, &mut out);
+        let start = DVec3::new(-0.05, 0.001, 0.3);
+        let (q, _) = refiner.onto_surface(start, 0.2).expect("arrives");
+        let d = q.y.abs() - q.x * t;
+        assert!(d.abs() < tolerance, "{q:?} is {d} off");
+        // And it is the edge, not a point of a face far from it.
+        assert!(q.x.abs() < 0.002 && q.y.abs() < 0.002, "{q:?}");
+    }
+
+    #[test]
+    fn new_vertices_keep_apart() {
+        // A wedge whose sharp edge runs across the lattice at a slant: the chords across it
+        // split onto one straight crease line, where two edges' new vertices could land a
+        // hair apart and make needles.
+        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+        let t = 25f64.to_radians().tan();
+        let across = &x * 0.8 + &z * 0.6;
+        let slab = (&y - &across * t).max(&(-&y - &across * t));
+        let shape = slab.max(&((&across - 0.9).max(&(-&across - 0.9))));
+        let bounds = Bounds::new([-1.1; 3], [1.1; 3]).unwrap();
+        let cell = 2.2 / 64.0;
+        let (uniform, out) = refined(&shape, bounds, 6, 0.1 * cell);
+        let new: Vec<glam::DVec3> = out.vertices[uniform.vertices.len()..]
+            .iter()
+            .map(|p| glam::Vec3::from(*p).as_dvec3())
+            .collect();
+        assert!(
+            new.len() > 50,
+            "the fault's setting: {} new vertices",
+            new.len()
+        );
+        let mut closest = f64::INFINITY;
+        for (i, a) in new.iter().enumerate() {
+            for b in &new[i + 1..] {
+                closest = closest.min((*a - *b).length());
+            }
+        }
+        assert!(closest >= cell / 32.0 * 0.999, "{closest} apart");
+        assert!(
+            check(&out).is_closed_manifold(),
+            "{:?}",
+            check(&out).problems()
+        );
     }
 
     #[test]
