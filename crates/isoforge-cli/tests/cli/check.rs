@@ -103,14 +103,33 @@ fn quiet_prints_nothing_but_keeps_the_verdict() {
     assert!(out.stdout.is_empty() && out.stderr.is_empty());
 }
 
+/// The bench sphere meshed at depth 6 into `dir`: the mesh's path, the model's, and
+/// `mesh --json`'s report.
+fn meshed_ball(dir: &std::path::Path) -> (String, String, serde_json::Value) {
+    let out = dir.join("ball.stl").display().to_string();
+    let sphere = fixtures().join("bench/sphere.rhai").display().to_string();
+    let made = isoforge(&["mesh", &sphere, "-o", &out, "--depth", "6", "--json"]);
+    assert!(made.status.success());
+    let json = serde_json::from_slice(&made.stdout).expect("JSON");
+    (out, sphere, json)
+}
+
+/// A ball of radius `r` (a script parameter, default 1) in the bench sphere's region,
+/// written into `dir`.
+fn ball_of_radius_r(dir: &std::path::Path) -> String {
+    let path = dir.join("ball_r.rhai");
+    std::fs::write(
+        &path,
+        "let r = param(\"r\", 1.0, 0.1, 3.0);\nbounds([-1.5, -1.5, -1.5], [1.5, 1.5, 1.5]);\nx^2 + y^2 + z^2 - r * r\n",
+    )
+    .unwrap();
+    path.display().to_string()
+}
+
 #[test]
 fn against_a_model_measures_the_distance_to_its_surface() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("ball.stl");
-    let out_s = out.display().to_string();
-    let sphere = fixtures().join("bench/sphere.rhai").display().to_string();
-    let made = isoforge(&["mesh", &sphere, "-o", &out_s, "--depth", "6", "--quiet"]);
-    assert!(made.status.success());
+    let (out_s, sphere, _) = meshed_ball(dir.path());
     let deviation = |model: &str, extra: &[&str]| {
         let mut args = vec!["check", &out_s, "--against", model, "--json"];
         args.extend_from_slice(extra);
@@ -125,13 +144,7 @@ fn against_a_model_measures_the_distance_to_its_surface() {
     let (max, mean) = deviation(&sphere, &[]);
     assert!(max <= 0.1 * 3.0 / 64.0 && mean <= max, "{max} {mean}");
     // Against a ball 0.2 larger, by a script parameter: about 0.2 everywhere.
-    let scaled = dir.path().join("ball_r.rhai");
-    std::fs::write(
-        &scaled,
-        "let r = param(\"r\", 1.0, 0.1, 3.0);\nbounds([-1.5, -1.5, -1.5], [1.5, 1.5, 1.5]);\nx^2 + y^2 + z^2 - r * r\n",
-    )
-    .unwrap();
-    let scaled = scaled.display().to_string();
+    let scaled = ball_of_radius_r(dir.path());
     let (max, mean) = deviation(&scaled, &["--param", "r=1.2"]);
     assert!(
         (max - 0.2).abs() < 0.01 && (mean - 0.2).abs() < 0.01,
@@ -153,12 +166,7 @@ fn against_a_model_measures_the_distance_to_its_surface() {
 #[test]
 fn a_tolerance_is_held_or_the_share_of_the_area_beyond_it_is_reported() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("ball.stl");
-    let out_s = out.display().to_string();
-    let sphere = fixtures().join("bench/sphere.rhai").display().to_string();
-    let made = isoforge(&["mesh", &sphere, "-o", &out_s, "--depth", "6", "--json"]);
-    assert!(made.status.success());
-    let made: serde_json::Value = serde_json::from_slice(&made.stdout).expect("JSON");
+    let (out_s, sphere, made) = meshed_ball(dir.path());
     let tolerance = made["tolerance"].as_f64().expect("tolerance").to_string();
     let check = |model: &str, tolerance: &str, extra: &[&str]| {
         let mut args = vec![
@@ -181,24 +189,19 @@ fn a_tolerance_is_held_or_the_share_of_the_area_beyond_it_is_reported() {
     assert_eq!(j["points_beyond_tolerance"], 0);
     // Against a ball 0.2 larger, 0.1 does not (the fault is there: the whole surface is
     // 0.2 off), and the exit status says so; 0.3 does.
-    let scaled = dir.path().join("ball_r.rhai");
-    std::fs::write(
-        &scaled,
-        "bounds([-1.5, -1.5, -1.5], [1.5, 1.5, 1.5]);\nx^2 + y^2 + z^2 - 1.44\n",
-    )
-    .unwrap();
-    let scaled = scaled.display().to_string();
-    let run = check(&scaled, "0.1", &["--json"]);
+    let scaled = ball_of_radius_r(dir.path());
+    let larger: &[&str] = &["--param", "r=1.2"];
+    let run = check(&scaled, "0.1", &[larger, &["--json"]].concat());
     assert_eq!(run.status.code(), Some(1));
     let j: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
     assert_eq!(j["tolerance_held"], false);
     assert_eq!(j["closed_manifold"], true);
     let share = j["area_beyond_tolerance"].as_f64().unwrap_or(0.0);
     assert!(share > 0.999 && share <= 1.0, "{share}");
-    let run = check(&scaled, "0.1", &[]);
+    let run = check(&scaled, "0.1", larger);
     let text = String::from_utf8_lossy(&run.stdout);
     assert!(text.contains("NOT held: 100.0000 % of the area"), "{text}");
-    assert_eq!(check(&scaled, "0.3", &[]).status.code(), Some(0));
+    assert_eq!(check(&scaled, "0.3", larger).status.code(), Some(0));
     // A tolerance needs a model; it is a distance.
     let run = isoforge(&["check", &out_s, "--tolerance", "0.1"]);
     assert_eq!(run.status.code(), Some(2));

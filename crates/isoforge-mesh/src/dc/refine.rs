@@ -356,25 +356,29 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         // Where tangent planes meet: the ends' (a crease between them), and, when one end
         // sits on the crease itself and has the same face's normal as the other, the
         // plane where the middle landed with each end's.
-        let mut planes = vec![(pa, va.normal()), (pb, vb.normal())];
-        planes.extend(along);
-        let pairs: &[(usize, usize)] = if planes.len() == 3 {
-            &[(0, 1), (0, 2), (2, 1)]
-        } else {
-            &[(0, 1)]
-        };
+        let ends = [(pa, va.normal()), (pb, vb.normal())];
+        let mut pairs = vec![(ends[0], ends[1])];
+        if let Some(landed) = along {
+            pairs.extend([(ends[0], landed), (landed, ends[1])]);
+        }
+        // Too near an end, a new vertex would make a sliver (or, written as STL and read
+        // back, the same point twice).
+        let clear_of_ends = |q: DVec3| (q - pa).length().min((q - pb).length()) >= len * NEAR_END;
         // Each candidate with its halves' error, the straightest first.
         let mut candidates: Vec<(f64, (DVec3, DVec3))> = Vec::new();
-        if let Some(g) = along {
+        if let Some(g) = along.filter(|g| clear_of_ends(g.0)) {
             candidates.push((self.halves_error(pa, pb, g.0), g));
         }
-        for &(i, j) in pairs {
-            let Some(x) = crease_point(planes[i], planes[j], mid)
+        for (plane_a, plane_b) in pairs {
+            let Some(x) = crease_point(plane_a, plane_b, mid)
                 .filter(|x| (*x - mid).length() <= len * CREASE_REACH)
             else {
                 continue;
             };
-            let Some(c) = self.onto_surface(x, len * CREASE_SNAP) else {
+            let Some(c) = self
+                .onto_surface(x, len * CREASE_SNAP)
+                .filter(|c| clear_of_ends(c.0))
+            else {
                 continue;
             };
             if (c.0 - mid).length() > len * FAR_CREASE && !self.halves_hold(pa, pb, c.0) {
@@ -383,23 +387,13 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             candidates.push((self.halves_error(pa, pb, c.0), c));
         }
         candidates.sort_by(|x, y| x.0.total_cmp(&y.0));
-        let mut crowded = false;
-        let mut chosen = None;
-        for &(_, (q, n)) in &candidates {
-            // Too near an end, it would make a sliver (or, written as STL and read back,
-            // the same point twice).
-            if (q - pa).length().min((q - pb).length()) < len * NEAR_END {
-                continue;
-            }
-            if self.crowded(q) {
-                crowded = true;
-                continue;
-            }
-            chosen = Some((q, n));
-            break;
-        }
+        let chosen = candidates
+            .iter()
+            .map(|c| c.1)
+            .find(|&(q, _)| !self.crowded(q));
         let Some((q, n)) = chosen else {
-            if crowded {
+            // Every candidate was crowded: a "no" that depends on more than the edge.
+            if !candidates.is_empty() {
                 self.refused.insert(key, 0);
             }
             return Ok(None);
