@@ -206,6 +206,119 @@ fn threads_and_progress_are_honoured() {
     assert_eq!(one, all);
 }
 
+/// Balls narrower than about a cell, each holding one lattice corner (drawn by the random
+/// CSG test below, whose seeds they were): dual contouring alone must mesh them facing
+/// out (most of their area), and with the refiner at a tight tolerance they must stay the
+/// right way out.
+/// Before, a cell beside the corner held its vertex in that corner, on the ball's near
+/// side, half the triangles faced in and the mesh held 1% of the ball's volume; refined,
+/// the balls came out inside out.
+#[test]
+fn balls_narrower_than_a_cell_face_out() {
+    // (centre, radius, region, depth)
+    let balls = [
+        (
+            [-0.25, 0.0, -0.5],
+            0.067_170_403_747_533_07,
+            (
+                [-0.8, -0.920_214_508_787_935_5, -1.257_248_641_214_815_8],
+                [0.8, 0.8, 1.098_006_398_959_446_2],
+            ),
+            4,
+        ),
+        (
+            [-0.75, 0.25, -0.25],
+            0.074_320_241_202_318_74,
+            (
+                [-0.842_032_032_690_055_6, -0.8, -1.196_610_340_135_254_4],
+                [0.8, 0.8, 1.219_747_444_230_946_2],
+            ),
+            4,
+        ),
+        (
+            [-0.5, 0.5, -0.5],
+            0.172_445_388_761_330_25,
+            (
+                [
+                    -0.900_815_685_180_329_5,
+                    -0.854_483_523_785_535_7,
+                    -0.928_434_076_350_855_2,
+                ],
+                [0.8, 0.8, 1.218_037_742_859_548_1],
+            ),
+            3,
+        ),
+        (
+            [0.5, -0.25, -0.25],
+            0.184_668_532_916_804_1,
+            (
+                [-0.8, -1.289_596_919_118_455_5, -1.274_022_905_210_184_1],
+                [0.8, 0.8, 0.949_264_799_226_562_3],
+            ),
+            3,
+        ),
+    ];
+    for (c, r, (lo, hi), depth) in balls {
+        let shape = sphere_at(c, r);
+        let exact = 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+        let mut settings = MeshSettings::new(Bounds::new(lo, hi).expect("a box"), depth);
+        settings.tolerance = Some(0.0);
+        let (mesh, volume) = mesh_ok_with(&shape, &settings, "ball, dual contouring alone");
+        // The area facing into the ball, as a share of all.
+        let (mut inward, mut all) = (0.0, 0.0);
+        for t in &mesh.triangles {
+            let p = t.map(|i| mesh.vertices[i as usize].map(f64::from));
+            let (u, w) = (
+                [0, 1, 2].map(|k| p[1][k] - p[0][k]),
+                [0, 1, 2].map(|k| p[2][k] - p[0][k]),
+            );
+            let n = [
+                u[1] * w[2] - u[2] * w[1],
+                u[2] * w[0] - u[0] * w[2],
+                u[0] * w[1] - u[1] * w[0],
+            ];
+            let out: f64 = (0..3)
+                .map(|k| n[k] * ((p[0][k] + p[1][k] + p[2][k]) / 3.0 - c[k]))
+                .sum();
+            let area = n.iter().map(|x| x * x).sum::<f64>().sqrt();
+            all += area;
+            if out < 0.0 {
+                inward += area;
+            }
+        }
+        eprintln!(
+            "ball at {c:?}: volume {:.3} of exact, inward area {:.3}",
+            volume / exact,
+            inward / all
+        );
+        for tolerance in [None, Some(0.05 * settings.cell())] {
+            settings.tolerance = tolerance;
+            mesh_ok_with(&shape, &settings, "ball, refined");
+        }
+    }
+}
+
+/// A ball 3.3 cells wide in a corner of the region, at a tolerance of 3 cells (a seed of
+/// the random CSG test): the collapses leave it 6 triangles, and a crease point the
+/// refiner found for one edge moved that edge's middle inwards as its triangle sees it,
+/// while the field said outwards. The mesh came out inside out (volume −0.019).
+#[test]
+fn a_coarse_ball_at_a_large_tolerance_stays_outward() {
+    let shape = sphere_at([0.75, -0.75, 0.75], 0.499_826_891_906_626_1);
+    let bounds = Bounds::new(
+        [
+            -1.162_743_629_197_630_7,
+            -0.812_897_799_187_762,
+            -0.972_050_036_836_623_2,
+        ],
+        [1.273_942_035_870_429_6, 0.8, 0.802_969_235_793_597_9],
+    )
+    .expect("a box");
+    let mut settings = MeshSettings::new(bounds, 3);
+    settings.tolerance = Some(3.0 * settings.cell());
+    mesh_ok_with(&shape, &settings, "coarse ball");
+}
+
 fn value_at(s: &Shape, p: [f64; 3]) -> f64 {
     PointEval::new().eval(&Tape::new(s), p)
 }
