@@ -8,6 +8,9 @@
 //! close by (just outside a convex edge, where the nearest surface is not along the
 //! gradient) keeps the first-order estimate.
 //!
+//! It also counts the triangles that face against the field's gradient at their centroid:
+//! folds, which neither the distance nor a check of the mesh alone reveals.
+//!
 //! ```
 //! use isoforge_field::{Bounds, ClippedField, Shape};
 //! use isoforge_mesh::{deviation, mesh_shape, MeshSettings};
@@ -55,6 +58,12 @@ pub struct Deviation {
     /// With a tolerance: whether every point counted beyond it was searched around (see
     /// `refine_largest`); if not, the counts beyond are upper bounds.
     pub beyond_exact: bool,
+    /// Triangles whose normal is more than 90° from the field's gradient at their centroid:
+    /// folds, where the mesh doubles back on itself (a closed, manifold mesh can still
+    /// have them, and checkers that look at the mesh alone do not see them).
+    pub facing_against: usize,
+    /// Their share of the mesh's area, 0 to 1.
+    pub area_facing_against: f64,
 }
 
 impl Deviation {
@@ -141,6 +150,27 @@ pub fn deviation_beyond(mesh: &Mesh, field: &ClippedField, tolerance: f64) -> De
     }
     out.mean = if area > 0.0 { weighted / area } else { 0.0 };
     out.area_beyond = if area > 0.0 { beyond / area } else { 0.0 };
+    let against: Vec<f64> = mesh
+        .triangles
+        .par_iter()
+        .map_init(GradEval::new, |grad, &t| {
+            let [a, b, c] = mesh.corners(t);
+            let n = (b - a).cross(c - a);
+            let g = field.grad(grad, ((a + b + c) / 3.0).to_array());
+            if n.dot(DVec3::from(g.d)) < 0.0 {
+                n.length()
+            } else {
+                -1.0
+            }
+        })
+        .filter(|&twice| twice >= 0.0)
+        .collect();
+    out.facing_against = against.len();
+    out.area_facing_against = if area > 0.0 {
+        against.iter().fold(0.0, |s, x| s + x) / area
+    } else {
+        0.0
+    };
     out
 }
 
@@ -400,13 +430,9 @@ mod tests {
         assert!((d.max - 0.01).abs() < 2e-4, "{d:?}");
     }
 
-    #[test]
-    fn a_sphere_inscribed_polyhedron_deviates_by_its_sagitta() {
-        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
-        let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
-        let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
-        // An octahedron with corners on the unit sphere: its face centres are at 1/√3.
-        let mesh = Mesh {
+    /// The octahedron with corners on the unit sphere.
+    fn octahedron() -> Mesh {
+        Mesh {
             vertices: vec![
                 [1.0, 0.0, 0.0],
                 [-1.0, 0.0, 0.0],
@@ -425,8 +451,18 @@ mod tests {
                 [3, 1, 5],
                 [0, 3, 5],
             ],
-        };
+        }
+    }
+
+    #[test]
+    fn a_sphere_inscribed_polyhedron_deviates_by_its_sagitta() {
+        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+        let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
+        let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
+        // Its face centres are at 1/√3.
+        let mesh = octahedron();
         let d = deviation(&mesh, &ClippedField::new(&ball, region));
+        assert_eq!((d.facing_against, d.area_facing_against), (0, 0.0));
         let expected = 1.0 - 1.0 / 3f64.sqrt();
         assert!((d.max - expected).abs() < 1e-6, "{d:?}");
         assert!(d.mean > 0.0 && d.mean < d.max);
@@ -444,5 +480,24 @@ mod tests {
         assert!((over(0.35).area_beyond - 27.0 / 60.0).abs() < 1e-9);
         assert_eq!(over(0.35).points_beyond, 8);
         assert!(over(0.35).beyond_exact);
+    }
+
+    #[test]
+    fn a_fold_is_counted_as_facing_against() {
+        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+        let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
+        let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
+        // The top corner pushed down through the middle: still closed and manifold, but
+        // its four triangles now face down, into the ball at their centroids.
+        let mut mesh = octahedron();
+        mesh.vertices[4] = [0.0, 0.0, -0.3];
+        assert!(crate::check(&mesh).is_closed_manifold());
+        let d = deviation(&mesh, &ClippedField::new(&ball, region));
+        assert_eq!(d.facing_against, 4);
+        let [a, b, c] = mesh.corners(mesh.triangles[0]);
+        let [p, q, r] = mesh.corners(mesh.triangles[4]);
+        let (top, bottom) = ((b - a).cross(c - a).length(), (q - p).cross(r - p).length());
+        let share = top / (top + bottom);
+        assert!((d.area_facing_against - share).abs() < 1e-9, "{d:?}");
     }
 }

@@ -105,6 +105,8 @@ pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
             obj.insert("mean_deviation".into(), json!(d.mean));
             obj.insert("max_deviation_at".into(), json!(d.at));
             obj.insert("deviation_samples".into(), json!(d.samples));
+            obj.insert("triangles_facing_against".into(), json!(d.facing_against));
+            obj.insert("area_facing_against".into(), json!(d.area_facing_against));
             if let Some(t) = tolerance {
                 obj.insert("tolerance".into(), json!(t));
                 obj.insert("tolerance_held".into(), json!(held));
@@ -207,10 +209,10 @@ pub fn report_text(file: &str, r: &MeshReport) -> String {
     s
 }
 
-/// The distance rows of the readable report.
+/// The distance rows of the readable report, and the folds.
 fn deviation_text(d: &Deviation) -> String {
     format!(
-        "  {:<24}{:.6} mm (at [{}, {}, {}])\n  {:<24}{:.6} mm ({} points sampled)\n",
+        "  {:<24}{:.6} mm (at [{}, {}, {}])\n  {:<24}{:.6} mm ({} points sampled)\n  {:<24}{} triangles ({:.4} % of the area)\n",
         "max deviation",
         d.max,
         d.at[0] as f32,
@@ -218,7 +220,10 @@ fn deviation_text(d: &Deviation) -> String {
         d.at[2] as f32,
         "mean deviation",
         d.mean,
-        d.samples
+        d.samples,
+        "facing against field",
+        d.facing_against,
+        100.0 * d.area_facing_against,
     )
 }
 

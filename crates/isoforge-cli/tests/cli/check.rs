@@ -296,3 +296,62 @@ fn a_3mf_that_says_it_inflates_to_gigabytes_is_refused_before_inflating() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_fold_is_reported_as_triangles_facing_against_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let (out_s, sphere, _) = meshed_ball(dir.path());
+    let facing = |mesh: &str| {
+        let run = isoforge(&["check", mesh, "--against", &sphere, "--json"]);
+        let j: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+        (
+            j["triangles_facing_against"].as_u64(),
+            j["area_facing_against"].as_f64(),
+            run.status.code(),
+        )
+    };
+    // The meshed ball has no fold.
+    assert_eq!(facing(&out_s), (Some(0), Some(0.0), Some(0)));
+    // An octahedron on the unit sphere whose top corner is pushed down through the middle:
+    // closed and manifold (so the verdict stays yes), but its four upper triangles now
+    // face into the ball: 0.39 of the area (each is 0.54 against the lower ones' 0.87).
+    let v = [
+        [1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, -0.3],
+        [0.0, 0.0, -1.0],
+    ];
+    let tris = [
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
+    let mut stl = String::from("solid folded\n");
+    for t in tris {
+        stl += " facet normal 0 0 0\n  outer loop\n";
+        for i in t {
+            let p: [f64; 3] = v[i];
+            stl += &format!("   vertex {} {} {}\n", p[0], p[1], p[2]);
+        }
+        stl += "  endloop\n endfacet\n";
+    }
+    stl += "endsolid folded\n";
+    let folded = dir.path().join("folded.stl");
+    std::fs::write(&folded, stl).unwrap();
+    let (count, area, code) = facing(&folded.display().to_string());
+    assert_eq!((count, code), (Some(4), Some(0)));
+    assert!(area.is_some_and(|a| (a - 0.386).abs() < 0.005), "{area:?}");
+    let run = isoforge(&["check", &folded.display().to_string(), "--against", &sphere]);
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        text.contains("facing against field    4 triangles"),
+        "{text}"
+    );
+}
