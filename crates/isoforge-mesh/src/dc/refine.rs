@@ -19,7 +19,8 @@
 //! two tangent planes meet (the crease, to first order: the ends' planes, or the plane where
 //! the middle landed with either end's), whichever leaves the straighter halves and is
 //! neither near an end nor within [`APART`] cells of another new vertex; a triangle whose
-//! edges all hold but whose centre does not gets a vertex there. Splitting goes on in the
+//! edges all hold but whose centre does not gets a vertex there, unless a piece would face
+//! against the field at its corners (a fold). Splitting goes on in the
 //! pieces (longest split edge first, as in Rivara's bisection), at most [`MAX_SPLITS`]
 //! levels and down to edges of [`SHORTEST`] of a cell.
 //!
@@ -524,6 +525,17 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         let Some((q, n)) = self.onto_surface(c, shortest * MID_REACH) else {
             return Ok(None);
         };
+        // Not if a piece would face against the field both at the new vertex and at its
+        // own edge's ends (a fold: the centre is within this one triangle, so leaving it
+        // out changes nothing elsewhere).
+        let folds = (0..3).any(|k| {
+            let (a, b) = (v[k], v[(k + 1) % 3]);
+            let piece = (b.at() - a.at()).cross(q - a.at());
+            piece.dot(n) < 0.0 && piece.dot(a.normal()) < 0.0 && piece.dot(b.normal()) < 0.0
+        });
+        if folds {
+            return Ok(None);
+        }
         let level = v.iter().map(|x| x.level).max().unwrap_or(0);
         self.emit_vertex(q, n, level + 1).map(Some)
     }
@@ -712,6 +724,37 @@ mod tests {
         assert!(d.abs() < tolerance, "{q:?} is {d} off");
         // And it is the edge, not a point of a face far from it.
         assert!(q.x.abs() < 0.002 && q.y.abs() < 0.002, "{q:?}");
+    }
+
+    #[test]
+    fn a_triangle_facing_into_the_solid_gets_no_centre() {
+        // A small equilateral triangle on the unit sphere near its pole: its edges' middles
+        // hold the tolerance (0.0070 deep, under 0.8 of 0.01) and its centre does not
+        // (0.0094), so it gets a vertex at its centre. Wound the other way, it faces into
+        // the ball (a fold, as dual contouring leaves some at creases), and a centre would
+        // only make three folded pieces of it.
+        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+        let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
+        let bounds = Bounds::new([-1.5; 3], [1.5; 3]).unwrap();
+        let sampler = TapeSampler::new(ClippedField::new(&ball, bounds));
+        let rho = 0.237 / 3f64.sqrt();
+        let corners: Vec<[f32; 3]> = (0..3)
+            .map(|k| {
+                let a = f64::from(k) * 120f64.to_radians();
+                [rho * a.cos(), rho * a.sin(), (1.0 - rho * rho).sqrt()].map(|c| c as f32)
+            })
+            .collect();
+        let pieces = |t: [u32; 3]| {
+            let mut out = Mesh::default();
+            let mut refiner = Refiner::new(&sampler, 0.01, &bounds, 0.1, &mut out);
+            for p in &corners {
+                refiner.vertex(*p).unwrap();
+            }
+            refiner.triangle(t, t.map(|i| corners[i as usize])).unwrap();
+            out.triangles.len()
+        };
+        assert_eq!(pieces([0, 1, 2]), 3, "facing out: centred");
+        assert_eq!(pieces([0, 2, 1]), 1, "facing in: left whole");
     }
 
     #[test]
