@@ -430,37 +430,13 @@ mod tests {
         assert!((d.max - 0.01).abs() < 2e-4, "{d:?}");
     }
 
-    /// The octahedron with corners on the unit sphere.
-    fn octahedron() -> Mesh {
-        Mesh {
-            vertices: vec![
-                [1.0, 0.0, 0.0],
-                [-1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [0.0, -1.0, 0.0],
-                [0.0, 0.0, 1.0],
-                [0.0, 0.0, -1.0],
-            ],
-            triangles: vec![
-                [0, 2, 4],
-                [2, 1, 4],
-                [1, 3, 4],
-                [3, 0, 4],
-                [2, 0, 5],
-                [1, 2, 5],
-                [3, 1, 5],
-                [0, 3, 5],
-            ],
-        }
-    }
-
     #[test]
     fn a_sphere_inscribed_polyhedron_deviates_by_its_sagitta() {
         let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
         let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
         let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
         // Its face centres are at 1/√3.
-        let mesh = octahedron();
+        let mesh = samples::octahedron();
         let d = deviation(&mesh, &ClippedField::new(&ball, region));
         assert_eq!((d.facing_against, d.area_facing_against), (0, 0.0));
         let expected = 1.0 - 1.0 / 3f64.sqrt();
@@ -489,7 +465,7 @@ mod tests {
         let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
         // The top corner pushed down through the middle: still closed and manifold, but
         // its four triangles now face down, into the ball at their centroids.
-        let mut mesh = octahedron();
+        let mut mesh = samples::octahedron();
         mesh.vertices[4] = [0.0, 0.0, -0.3];
         assert!(crate::check(&mesh).is_closed_manifold());
         let d = deviation(&mesh, &ClippedField::new(&ball, region));

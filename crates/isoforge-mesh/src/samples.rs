@@ -43,6 +43,30 @@ pub fn tetrahedron() -> Mesh {
     }
 }
 
+/// The octahedron with corners at ±1 on each axis (on the unit sphere), wound outwards.
+pub fn octahedron() -> Mesh {
+    Mesh {
+        vertices: vec![
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+        ],
+        triangles: vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ],
+    }
+}
+
 /// A closed UV sphere: `slices` around the z axis (at least 3), `stacks` from pole to pole
 /// (at least 2); `2 * slices * (stacks - 1)` triangles. `uv_sphere(1.0, 1000, 501)` has
 /// a million.

@@ -315,36 +315,10 @@ fn a_fold_is_reported_as_triangles_facing_against_the_field() {
     // An octahedron on the unit sphere whose top corner is pushed down through the middle:
     // closed and manifold (so the verdict stays yes), but its four upper triangles now
     // face into the ball: 0.39 of the area (each is 0.54 against the lower ones' 0.87).
-    let v = [
-        [1.0, 0.0, 0.0],
-        [-1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [0.0, -1.0, 0.0],
-        [0.0, 0.0, -0.3],
-        [0.0, 0.0, -1.0],
-    ];
-    let tris = [
-        [0, 2, 4],
-        [2, 1, 4],
-        [1, 3, 4],
-        [3, 0, 4],
-        [2, 0, 5],
-        [1, 2, 5],
-        [3, 1, 5],
-        [0, 3, 5],
-    ];
-    let mut stl = String::from("solid folded\n");
-    for t in tris {
-        stl += " facet normal 0 0 0\n  outer loop\n";
-        for i in t {
-            let p: [f64; 3] = v[i];
-            stl += &format!("   vertex {} {} {}\n", p[0], p[1], p[2]);
-        }
-        stl += "  endloop\n endfacet\n";
-    }
-    stl += "endsolid folded\n";
+    let mut octahedron = isoforge_mesh::samples::octahedron();
+    octahedron.vertices[4] = [0.0, 0.0, -0.3];
     let folded = dir.path().join("folded.stl");
-    std::fs::write(&folded, stl).unwrap();
+    isoforge_mesh::write_mesh(&octahedron, &folded, isoforge_mesh::MeshFormat::Stl).unwrap();
     let (count, area, code) = facing(&folded.display().to_string());
     assert_eq!((count, code), (Some(4), Some(0)));
     assert!(area.is_some_and(|a| (a - 0.386).abs() < 0.005), "{area:?}");

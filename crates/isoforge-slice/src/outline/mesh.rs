@@ -204,31 +204,7 @@ mod tests {
     use super::*;
     use crate::geom::contours_area;
 
-    /// A closed octahedron with vertices at ±1 on each axis, outward wound.
-    fn octahedron() -> Mesh {
-        let vertices = vec![
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
-        let triangles = vec![
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
-        Mesh {
-            vertices,
-            triangles,
-        }
-    }
+    use isoforge_mesh::samples::octahedron;
 
     #[test]
     fn octahedron_section_is_a_ccw_square() {
