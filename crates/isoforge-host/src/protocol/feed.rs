@@ -25,6 +25,10 @@ impl Protocol {
         }
         if garbled {
             // A damaged line may have been an `ok` or a resend request: the count may be off.
+            // It is still the printer answering: a probe it answered with a damaged line is
+            // not one it left unanswered (three losses in a row on a noisy link, a line
+            // lost, the answer damaged, the next probe lost, once ended a job).
+            self.watchdog.alive(now);
             self.irregular = true;
             self.watchdog.suspect = true;
             if self.recovery.careful() {
@@ -129,22 +133,22 @@ impl Protocol {
 
     /// Before the job: banners, stray bytes after a reset (`\x80`), `SD card ok`, echo
     /// chatter and late answers to the connection's probes all pass without effect.
+    ///
+    /// The job starts only once `ok`s have stopped coming for `boot_wait`. An `ok` is not
+    /// tagged with what it answers: Smoothieware's banner ends with one, and a probe damaged
+    /// on the way is answered `Unknown command` and `ok` after it. Such an `ok` arriving
+    /// after the opening `M110` would be taken for its answer, the first job line would go
+    /// out before `M110` ran, and running `M110 N0` would set the count back under it: the
+    /// printer then asks for line 1 again, which it has already executed.
     fn feed_while_connecting(&mut self, reply: Reply, now: Instant) {
         match reply {
-            Reply::Ok { .. } => match self.phase {
-                Phase::Connecting { .. } => {
-                    self.connect_probes_outstanding =
-                        self.connect_probes_outstanding.saturating_sub(1);
-                    self.phase = Phase::Booted { until: now };
+            Reply::Ok { .. } => {
+                if matches!(self.phase, Phase::Connecting { .. } | Phase::Booted { .. }) {
+                    self.phase = Phase::Booted {
+                        until: now + self.cfg.boot_wait,
+                    };
                 }
-                Phase::Booted { .. } if self.connect_probes_outstanding > 0 => {
-                    // An answer to a probe means the firmware reached its main loop: no need
-                    // to wait out the rest of the boot chatter.
-                    self.connect_probes_outstanding -= 1;
-                    self.phase = Phase::Booted { until: now };
-                }
-                _ => {}
-            },
+            }
             Reply::Start => {
                 self.phase = Phase::Booted {
                     until: now + self.cfg.boot_wait,
@@ -180,6 +184,16 @@ impl Protocol {
                 }
                 return;
             }
+            if self
+                .window
+                .front()
+                .and_then(|f| f.line())
+                .is_some_and(|front| n < front)
+            {
+                // It names a line already done: not the `ok` of anything in flight.
+                self.watchdog.alive(now);
+                return;
+            }
         }
         if self.recovery.take_refusal_ok(now, self.cfg.resend_settle) {
             // The `ok` Marlin prints with every resend request belongs to the refused line.
@@ -200,18 +214,12 @@ impl Protocol {
                 _ => false,
             };
             if let Some(first) = self.window.position(|f| f.is_m105(is_m105)) {
-                // Probes right behind it are done too: when `ok`s were lost this answer may
-                // be theirs, and a probe counted done early changes nothing.
-                let mut last = first;
-                while self
-                    .window
-                    .iter()
-                    .nth(last + 1)
-                    .is_some_and(|f| matches!(f.sent, Sent::Line(_, Carries::Probe)))
-                {
-                    last += 1;
-                }
-                for f in self.window.take_front(last + 1) {
+                // Only through the first: probes behind it may still wait in the firmware's
+                // buffer. Counted done with it, they made room that was not there: the host
+                // overran a 128-byte receive buffer, and a line that lost bytes whose XOR
+                // was zero passed its checksum as another command. A probe whose `ok` was
+                // lost is forgotten by the watchdog once the printer has gone quiet.
+                for f in self.window.take_front(first + 1) {
                     self.done_with(f.sent);
                 }
             }
@@ -260,7 +268,12 @@ impl Protocol {
         }
         // The request answers any error line of its burst.
         let burst_error = self.pending_error.take().map(|e| e.class);
-        self.recovery.refused(now);
+        // Firmwares that ask with `rs` (RepRapFirmware, Smoothieware) print no `ok` after
+        // a refusal: an `ok` right after their request is the resent line's. Taken for the
+        // refusal's, it left the resent line waiting for a probe after every request.
+        if form != ResendForm::Rs {
+            self.recovery.refused(now);
+        }
         self.on_resend(LineNo(n), burst_error, now);
     }
 
@@ -275,8 +288,12 @@ impl Protocol {
             Sent::Renumber(at) => Some(at),
             Sent::Line(..) => None,
         });
+        // Lines sent after the renumbering (a step forward when its `ok` was lost) may have
+        // been taken behind it: then the request is about them, and holding them back for
+        // a renumbering that cannot go while they are in flight stalled the job for good.
+        let sent_past = |at: LineNo| self.window.iter().any(|f| f.line().is_some_and(|l| l > at));
         if let Some(at) = renumbering
-            && n == at.next()
+            && (n == at.next() || sent_past(at))
         {
             // The count is where the renumbering puts it (M110 itself is never refused for
             // its number): the request is about the lines after it, and is taken as such.
@@ -369,10 +386,12 @@ impl Protocol {
         let reading = (since.len() == 1).then(|| since.pop()).flatten();
         if let (Some(ErrorClass::RefusedLine { last_line: None }), Some(r)) =
             (&burst_error, reading)
-            && r != n
+            && n > r
         {
-            // It refused the line it was reading without naming its count, and asks for
-            // another: the count it keeps has drifted.
+            // It refused the line it was reading without naming its count, and asks for a
+            // later one: the count it keeps has drifted ahead. A request for an earlier line
+            // is not a drift: that line's `ok` was a damaged or stray one (the count had
+            // been doubted), and setting the count past it skipped it.
             self.count_drift(r, n);
             return;
         }

@@ -118,14 +118,21 @@ fn strip_prefix_ci<'a>(s: &'a str, prefix: &str) -> Option<&'a str> {
 fn parse_ok(rest: &str) -> Reply {
     let mut line = None;
     let mut buffer = None;
+    let mut advanced = false;
     for w in rest.split_whitespace() {
         if let Some(v) = w.strip_prefix('N') {
+            advanced = true;
             line = line.or(v.parse().ok());
         } else if let Some(v) = w.strip_prefix('B') {
             buffer = buffer.or(v.parse().ok());
         } else if w.bytes().all(|b| b.is_ascii_digit()) {
             line = line.or(w.parse().ok());
         }
+    }
+    if advanced && buffer.is_none() {
+        // ADVANCED_OK's `N` is the last line received, not the line this `ok` is for (as
+        // Repetier's bare number is): with its `B` damaged, it is a plain `ok`.
+        line = None;
     }
     Reply::Ok {
         line,
@@ -150,6 +157,10 @@ mod tests {
         );
         match Reply::parse("ok N12 P15 B3") {
             Reply::Ok { line, buffer, .. } => assert_eq!((line, buffer), (Some(12), Some(3))),
+            r => panic!("{r:?}"),
+        }
+        match Reply::parse("ok N12 P15 B\u{fffd}") {
+            Reply::Ok { line, buffer, .. } => assert_eq!((line, buffer), (None, None)),
             r => panic!("{r:?}"),
         }
         match Reply::parse("ok 12") {

@@ -32,7 +32,6 @@ impl Protocol {
                     };
                     // Before the job starts the firmware's line count is unknown, so this
                     // question goes unnumbered.
-                    self.connect_probes_outstanding += 1;
                     let probe = "M105\n".to_string();
                     self.stats.bytes_sent += probe.len() as u64;
                     return Some(Output::Send(probe));
@@ -41,7 +40,6 @@ impl Protocol {
             Phase::Booted { until } => {
                 if now >= until {
                     self.phase = Phase::Streaming;
-                    self.connect_probes_outstanding = 0;
                     self.watchdog = Watchdog::new(now);
                     self.event(Event::Connected);
                 }
@@ -246,6 +244,13 @@ impl Protocol {
 
     fn check_watchdog(&mut self, now: Instant) {
         if self.phase != Phase::Streaming || self.window.is_empty() {
+            return;
+        }
+        if self.pending_error.is_some() {
+            // An error line waits (a short grace) for its resend request, and is then taken
+            // as that request. A line the watchdog let out meanwhile (a damaged reply makes
+            // it ask at once) was followed by the error acted on late, as a fresh request:
+            // lines already taken went again, and ran twice.
             return;
         }
         let long_front = self.window.front().is_some_and(|f| f.long);

@@ -150,6 +150,48 @@ fn every_fault_on_every_dialect() {
     }
 }
 
+/// A job of 250 commands under `faults`, as the random hunt below runs it: it must finish,
+/// with every command executed once, in order, and never overrun the receive buffer.
+fn run_mix(
+    dialect: Dialect,
+    faults: Faults,
+    window: usize,
+    chunk: usize,
+) -> Result<(), TestCaseError> {
+    let seed = faults.seed;
+    let j = job(250);
+    let fw = FirmwareConfig {
+        faults,
+        dialect,
+        ..FirmwareConfig::default()
+    };
+    let mut sim = Sim::new(&j, Config { window, ..cfg() }, fw, seed ^ 0x5eed);
+    sim.chunk = chunk;
+    let out = sim.run(3_000_000);
+    let trace = || sim.trace.iter().cloned().collect::<Vec<_>>().join("\n");
+    prop_assert!(
+        matches!(out, Outcome::Finished { cancelled: false }),
+        "{out:?}\n{}\n{}",
+        sim.proto.describe(),
+        trace()
+    );
+    let done = sim.executed_job();
+    prop_assert!(
+        done == j,
+        "executed {} of {}\n{}",
+        done.len(),
+        j.len(),
+        trace()
+    );
+    prop_assert_eq!(
+        sim.fw.lost_bytes(),
+        0,
+        "overran the receive buffer\n{}",
+        trace()
+    );
+    Ok(())
+}
+
 proptest! {
     // PROPTEST_CASES raises the count for a longer hunt.
     #![proptest_config(ProptestConfig {
@@ -180,15 +222,199 @@ proptest! {
             corrupt, corrupt_reply, drop, drop_ok, error, spurious_resend, no_resend_ok, busy,
             advanced_ok, seed, ..Faults::default()
         };
-        let j = job(250);
-        let fw = FirmwareConfig { faults, dialect, ..FirmwareConfig::default() };
-        let mut sim = Sim::new(&j, Config { window, ..cfg() }, fw, seed ^ 0x5eed);
-        sim.chunk = chunk;
-        let out = sim.run(3_000_000);
-        let trace = || sim.trace.iter().cloned().collect::<Vec<_>>().join("\n");
-        prop_assert!(matches!(out, Outcome::Finished { cancelled: false }), "{out:?}\n{}\n{}", sim.proto.describe(), trace());
-        let done = sim.executed_job();
-        prop_assert!(done == j, "executed {} of {}\n{}", done.len(), j.len(), trace());
+        run_mix(dialect, faults, window, chunk)?;
+    }
+}
+
+/// Mixes the hunt above found (40,000 cases at a time), each with what it exposed. The
+/// proptest regression file replays them too; here they are named, and kept when a
+/// shrunk input has no seed line of its own.
+#[test]
+fn mixes_that_once_failed() {
+    // (what it exposed, dialect, window, chunk, advanced_ok, seed,
+    //  [corrupt, corrupt_reply, drop, drop_ok, error, spurious_resend, no_resend_ok, busy])
+    type Mix = (&'static str, Dialect, usize, usize, bool, u64, [f64; 8]);
+    let mixes: [Mix; 9] = [
+        (
+            "an `ok` from the connection taken for M110's: line 1 ran twice",
+            Dialect::Smoothie,
+            2,
+            64,
+            false,
+            15145023834887848096,
+            [
+                0.029078641460870882,
+                0.009091384115909665,
+                0.019326772518353116,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+            ],
+        ),
+        (
+            "a probe answered with a damaged line counted as unanswered: the job stopped",
+            Dialect::RepRapFirmware,
+            3,
+            1,
+            false,
+            16327628312596882553,
+            [
+                0.006080354866494309,
+                0.016424190275947406,
+                0.02288951958398901,
+                0.0,
+                0.011528278315541372,
+                0.016140384538090708,
+                0.0,
+                0.01930804525783218,
+            ],
+        ),
+        (
+            "the resent line's `ok` taken for an `rs` refusal's; three lines lost in a row",
+            Dialect::RepRapFirmware,
+            1,
+            1,
+            true,
+            11298467896925845781,
+            [
+                0.0162662322305883,
+                0.008218077159918749,
+                0.018786999393621447,
+                0.029484252630284584,
+                0.019485808718661117,
+                0.006248548232070621,
+                0.0,
+                0.020160296203496655,
+            ],
+        ),
+        (
+            "a renumbering waited for lines sent past it: the job stalled",
+            Dialect::OctoPrintVirtual,
+            2,
+            1,
+            true,
+            1217794692488968532,
+            [
+                0.0306933386280603,
+                0.00998640403958726,
+                0.0040477833076483566,
+                0.023601311209591348,
+                0.01758813437175741,
+                0.0002965647966544875,
+                0.17224121442174692,
+                0.04658783496623664,
+            ],
+        ),
+        (
+            "an error acted on after the watchdog's line: two lines ran twice",
+            Dialect::OctoPrintVirtual,
+            1,
+            1,
+            true,
+            14753867694463266175,
+            [
+                0.04863355287224217,
+                0.018185914228891552,
+                0.026957464165462998,
+                0.013905183084506693,
+                0.007205901822054283,
+                0.002435282698299599,
+                0.16345717032905172,
+                0.008058698734006772,
+            ],
+        ),
+        (
+            "a request for an earlier line taken as a drift: M110 skipped a line",
+            Dialect::OctoPrintVirtual,
+            1,
+            1,
+            true,
+            14753868573862361582,
+            [
+                0.04863355287224217,
+                0.018185914228891552,
+                0.026957464165462998,
+                0.013905183084506693,
+                0.007205901822054283,
+                0.002435282698299599,
+                0.16345717032905172,
+                0.008058698734006772,
+            ],
+        ),
+        (
+            "probes behind an answered M105 counted done: the receive buffer overran",
+            Dialect::Repetier,
+            2,
+            512,
+            true,
+            3914325046441994744,
+            [
+                0.04299414081424383,
+                0.004677836640245668,
+                0.00818942264991054,
+                0.00282130031110501,
+                0.006564317293531284,
+                0.01494454027446298,
+                0.17293191599797264,
+                0.04164800014158537,
+            ],
+        ),
+        (
+            "a damaged ADVANCED_OK `ok` taken for a line's: M110 ran under the lines after it",
+            Dialect::Marlin,
+            1,
+            64,
+            true,
+            11565997248057540677,
+            [
+                0.027157292124632575,
+                0.010794869840468345,
+                0.012676980021398337,
+                0.006324517949848798,
+                0.00047920412958955686,
+                0.01618309099528992,
+                0.27665498345180833,
+                0.04948809979807841,
+            ],
+        ),
+        (
+            "Repetier, every fault: the job stopped",
+            Dialect::Repetier,
+            1,
+            1,
+            true,
+            4776005614806705106,
+            [
+                0.012058098922576657,
+                0.018060679893141317,
+                0.022362663843936835,
+                0.023584034948168957,
+                0.007852940668091756,
+                0.004763835863097889,
+                0.1549015068620372,
+                5.274796968327597e-5,
+            ],
+        ),
+    ];
+    for (what, dialect, window, chunk, advanced_ok, seed, r) in mixes {
+        let faults = Faults {
+            corrupt: r[0],
+            corrupt_reply: r[1],
+            drop: r[2],
+            drop_ok: r[3],
+            error: r[4],
+            spurious_resend: r[5],
+            no_resend_ok: r[6],
+            busy: r[7],
+            advanced_ok,
+            seed,
+            ..Faults::default()
+        };
+        if let Err(e) = run_mix(dialect, faults, window, chunk) {
+            panic!("{what} ({dialect}, seed {seed}): {e}");
+        }
     }
 }
 

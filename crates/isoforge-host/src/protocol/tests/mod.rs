@@ -52,11 +52,17 @@ fn cfg() -> Config {
 
 /// A protocol past the handshake with M110 acknowledged, and the lines it sent next.
 fn connected(job: &[&str], cfg: Config) -> (Protocol, Instant, Vec<String>) {
-    let t = Instant::now();
+    let t0 = Instant::now();
     let texts: Vec<String> = job.iter().map(|s| s.to_string()).collect();
-    let mut p = Protocol::new(commands(&texts), cfg, t);
-    assert_eq!(drain(&mut p, t).sent, ["M105\n"]);
-    p.feed_line("ok T:20.0 /0.0 B:20.0 /0.0 @:0 B@:0", t);
+    let settle = cfg.boot_wait;
+    let mut p = Protocol::new(commands(&texts), cfg, t0);
+    assert_eq!(drain(&mut p, t0).sent, ["M105\n"]);
+    p.feed_line("ok T:20.0 /0.0 B:20.0 /0.0 @:0 B@:0", t0);
+    assert!(
+        drain(&mut p, t0).sent.is_empty(),
+        "nothing before the oks stop"
+    );
+    let t = t0 + settle;
     let d = drain(&mut p, t);
     assert!(d.events.contains(&Event::Connected));
     assert_eq!(d.sent, [gcode::frame(0, "M110 N0", 0).unwrap()]);
