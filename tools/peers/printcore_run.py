@@ -29,6 +29,20 @@ class Printcore(printcore):
         super()._send(command, lineno, calcchecksum)
 
 
+def disconnect(core):
+    """Disconnects once printcore has settled after the print. Its print thread ends by
+    creating a new sender thread and then starting it; a disconnect in between joins a thread
+    not yet started, and Python raises ("cannot join thread before it is started": it failed
+    a CI run). So wait for the print thread to be gone and the new sender to run."""
+    deadline = time.monotonic() + 5
+    while time.monotonic() < deadline:
+        sender = core.send_thread
+        if core.print_thread is None and (sender is None or sender.ident is not None):
+            break
+        time.sleep(0.01)
+    core.disconnect()
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("port")
@@ -56,7 +70,7 @@ def main():
         time.sleep(0.01)
     seconds = time.monotonic() - started
     completed = not core.printing
-    core.disconnect()
+    disconnect(core)
     print(
         json.dumps(
             {
