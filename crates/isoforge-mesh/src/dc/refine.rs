@@ -24,13 +24,24 @@
 //! pieces (longest split edge first, as in Rivara's bisection), at most [`MAX_SPLITS`]
 //! levels and down to edges of [`SHORTEST`] of a cell.
 //!
+//! No split may fold the mesh: a place to split is passed over when a piece of either
+//! triangle beside the edge would face against the field ([`FOLD_COS`]) where the triangle
+//! did not. So a triangle of the mesher's is held until the triangles across its edges that
+//! may split have come (they come slab by slab, so within a slab or two; at most
+//! [`HELD_MAX`] are held), and the pieces' new edges record the triangles beside them too.
+//! Without it, on a cube turned off the lattice (a random turn; the fixture's 30° and 20°
+//! happen to escape it), a crease point on one face was joined to corners on another, and
+//! the pieces lay on a face the wrong way round: up to 8 % of the area folded, the surface
+//! 19 % larger than the cube's at depth 6.
+//!
 //! Why the mesh stays closed and manifold: whether and where an edge splits is decided
 //! once, when the first triangle beside it asks, and the second reads the answer: a split's
 //! new vertex is kept in a map until both sides have used it. A "no" depends on the edge
-//! alone (its two end vertices) and gives the same answer when asked again, except where it
-//! came from another new vertex nearby (which the second side might not see): that "no" is
-//! kept until both sides have written the edge. A centre vertex is inside one triangle.
-//! Only positions of the mesher's vertices change, never which triangles they belong to.
+//! alone (its two end vertices and the triangles recorded beside it) and gives the same
+//! answer when asked again, except where it came from another new vertex nearby or from a
+//! fold (which the second side might not see): that "no" is kept until both sides have
+//! written the edge. A centre vertex is inside one triangle. Only positions of the mesher's
+//! vertices change, never which triangles they belong to.
 //!
 //! What it costs: one gradient per vertex, and one per edge whose ends' normals say a chord
 //! there could be off by a quarter of the tolerance (a circular arc of chord `l` whose
@@ -39,7 +50,8 @@
 //! 0.39 s and gyroid_sphere from 0.60 to 0.95 s (a stricter filter saved little and let
 //! curve_cyl's chords miss by 3.7 tolerances instead of 2.8).
 
-use std::collections::{HashMap, HashSet};
+use std::collections::{HashMap, HashSet, VecDeque};
+use std::hash::{BuildHasherDefault, Hasher};
 use std::io;
 
 use glam::DVec3;
@@ -82,6 +94,23 @@ const MID_REACH: f64 = 0.5;
 /// thin wall seen edge-on), each new middle moved onto the surface can leave a chord as long
 /// as before, and levels bound that.
 const MAX_SPLITS: u8 = 8;
+
+/// The mesher's triangles held at most while they wait for their neighbours. The mesh
+/// comes slab by slab, so a triangle's neighbours come within a slab or two.
+const HELD_MAX: usize = 1 << 18;
+
+/// A split's piece facing against the field by more than this (cosine, 154°) at its
+/// centre, where the triangle it comes from did not, is a fold the split would make: a
+/// crease point on a far face joined to corners on another (a cube turned off the lattice
+/// got pieces lying on a face the wrong way round, up to 8 % of its area folded). Pieces
+/// nearer square to it are left alone: at 90° sphere_circle and spheres_chain no longer
+/// held the tolerance (1.8 and 2.5 tolerances), the chords along their creases unsplit.
+const FOLD_COS: f64 = -0.9;
+
+/// Pieces smaller than this many square finest cells are not checked for folds: at creases
+/// dual contouring leaves small folds of its own, and the splits that hold the tolerance
+/// there may keep one (checked at any size, spaceship went from 5.6 to 6.1 tolerances).
+const FOLD_AREA: f64 = 0.25;
 
 /// Two vertex normals closer than this (cosine, 60°) do not make a crease between them.
 const CREASE_COS: f64 = 0.5;
@@ -164,11 +193,11 @@ pub struct Refiner<'a, S: Sampler> {
     remap: Vec<u32>,
     /// Split edges (lower, higher output index) that not both sides have used yet: the
     /// middle vertex, and how many sides have.
-    splits: HashMap<(u32, u32), (u32, u8)>,
+    splits: EdgeMap<(u32, u32), (u32, u8)>,
     /// Edges left whole because every place to split them was a hair from another new
     /// vertex (a decision that depends on more than the edge, so it is kept until both
     /// sides have written the edge): how many have.
-    refused: HashMap<(u32, u32), u8>,
+    refused: EdgeMap<(u32, u32), u8>,
     /// New (split) vertices by grid square of [`APART`] cells, latest and older.
     near: HashMap<[i64; 3], Vec<u32>>,
     near_older: HashMap<[i64; 3], Vec<u32>>,
@@ -177,6 +206,54 @@ pub struct Refiner<'a, S: Sampler> {
     older: HashSet<[u32; 3]>,
     /// The field narrowed to boxes near the latest vertices.
     locals: HashMap<[i64; 3], S::Local>,
+    /// The mesher's triangles waiting for their neighbours, by arrival, with how many of
+    /// their edges have not yet been seen from the other side.
+    held: EdgeMap<u64, ([u32; 3], u8)>,
+    /// Arrival order of the held triangles.
+    queue: VecDeque<u64>,
+    /// Arrivals so far.
+    arrived: u64,
+    /// The mesher's edges: the vertices opposite them, in the triangles on either side.
+    across: EdgeMap<(u32, u32), Across>,
+}
+
+/// A map keyed by vertex indices: a multiplicative hash, not SipHash (no key here comes from
+/// outside, and every triangle looks its edges up).
+type EdgeMap<K, V> = HashMap<K, V, BuildHasherDefault<IndexHash>>;
+
+/// Fibonacci hashing of the written integers.
+#[derive(Default)]
+struct IndexHash(u64);
+
+impl Hasher for IndexHash {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u32(&mut self, n: u32) {
+        self.write_u64(u64::from(n));
+    }
+    fn write_u64(&mut self, n: u64) {
+        self.0 = (self.0.rotate_left(5) ^ n).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    }
+}
+
+/// What is known about one of the mesher's edges.
+#[derive(Clone, Copy, Debug)]
+struct Across {
+    /// The vertices opposite the edge, `seen` of them (a piece's edge on a split edge also
+    /// records the corners of the split triangles), each with whether its triangle runs
+    /// along the edge from the lower index to the higher (counter-clockwise).
+    apex: [(u32, bool); 3],
+    seen: u8,
+    /// The held triangle that waits for the second side.
+    waiting: Option<u64>,
+    /// Sides written.
+    released: u8,
 }
 
 impl<'a, S: Sampler> Refiner<'a, S> {
@@ -200,13 +277,133 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             inner,
             verts: Vec::new(),
             remap: Vec::new(),
-            splits: HashMap::new(),
-            refused: HashMap::new(),
+            splits: EdgeMap::default(),
+            refused: EdgeMap::default(),
             near: HashMap::new(),
             near_older: HashMap::new(),
             recent: HashSet::new(),
             older: HashSet::new(),
             locals: HashMap::new(),
+            held: EdgeMap::default(),
+            queue: VecDeque::new(),
+            arrived: 0,
+            across: EdgeMap::default(),
+        }
+    }
+
+    /// Writes the triangles still waiting for a neighbour (none, on a closed mesh); call
+    /// once everything has come.
+    pub fn finish(&mut self) -> io::Result<()> {
+        while let Some(s) = self.queue.pop_front() {
+            if let Some((t, _)) = self.held.remove(&s) {
+                self.tessellate(t, 0, false)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Takes one of the mesher's triangles: held until the triangles across its edges have
+    /// come, so that a split of an edge is chosen knowing both triangles beside it.
+    fn arrive(&mut self, t: [u32; 3]) -> io::Result<()> {
+        let seq = self.arrived;
+        self.arrived += 1;
+
+        let mut missing = 0u8;
+        let mut ready = Vec::new();
+        for k in 0..3 {
+            let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            // An edge whose ends' normals say its chord holds is never split: neither side
+            // needs the other's corner (most edges, on smooth parts).
+            let (va, vb) = (self.verts[a as usize], self.verts[b as usize]);
+            if !self.may_stray(&va, &vb, (va.at() - vb.at()).length()) {
+                continue;
+            }
+            let e = self.across.entry((a.min(b), a.max(b))).or_insert(Across {
+                apex: [(c, a < b); 3],
+                seen: 0,
+                waiting: None,
+                released: 0,
+            });
+            match e.seen {
+                0 => {
+                    e.apex[0] = (c, a < b);
+                    e.seen = 1;
+                    e.waiting = Some(seq);
+                    missing += 1;
+                }
+                1 => {
+                    e.apex[1] = (c, a < b);
+                    e.seen = 2;
+                    if let Some(w) = e.waiting.take()
+                        && let Some(h) = self.held.get_mut(&w)
+                    {
+                        h.1 -= 1;
+                        if h.1 == 0 {
+                            ready.push(w);
+                        }
+                    }
+                }
+                // A third triangle on one edge: not a manifold input; split it as before.
+                _ => {}
+            }
+        }
+        if missing == 0 {
+            ready.push(seq);
+            self.held.insert(seq, (t, 0));
+        } else {
+            self.held.insert(seq, (t, missing));
+            self.queue.push_back(seq);
+        }
+        for w in ready {
+            if let Some((h, _)) = self.held.remove(&w) {
+                self.tessellate(h, 0, false)?;
+            }
+        }
+        // Bounded memory whatever the order triangles come in: the oldest go on with what
+        // is known of their neighbours.
+        while self.held.len() > HELD_MAX {
+            let Some(s) = self.queue.pop_front() else {
+                break;
+            };
+            if let Some((h, _)) = self.held.remove(&s) {
+                self.tessellate(h, 0, false)?;
+            }
+        }
+        if self.queue.len() > 2 * HELD_MAX {
+            let held = &self.held;
+            self.queue.retain(|s| held.contains_key(s));
+        }
+        Ok(())
+    }
+
+    /// Records the vertices opposite a new edge of the pieces (`apex`, and the other side's
+    /// where it is known).
+    fn note_across(&mut self, a: u32, b: u32, apex: &[(u32, bool)]) {
+        let mut e = Across {
+            apex: [(u32::MAX, true); 3],
+            seen: 0,
+            waiting: None,
+            released: 0,
+        };
+        for (slot, &z) in e.apex.iter_mut().zip(apex) {
+            *slot = z;
+            e.seen += 1;
+        }
+        // Never replaced: the other side must see what the first saw.
+        self.across.entry((a.min(b), a.max(b))).or_insert(e);
+    }
+
+    /// Counts a written side of each edge of `t`; the second forgets the edge.
+    fn forget_written(&mut self, t: [u32; 3]) {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let key = (a.min(b), a.max(b));
+            if let Some(e) = self.across.get_mut(&key) {
+                e.released += 1;
+                if e.released >= 2 {
+                    self.across.remove(&key);
+                }
+            }
         }
     }
 
@@ -327,7 +524,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
 
     /// The middle vertex of edge `a`–`b`, if it is split (made now, or found from the other
     /// side). The decision depends only on the two vertices, in index order.
-    fn split(&mut self, a: u32, b: u32) -> io::Result<Option<u32>> {
+    fn split(&mut self, a: u32, b: u32, apex: [DVec3; 3]) -> io::Result<Option<u32>> {
         let key = (a.min(b), a.max(b));
         if let Some(&(m, _)) = self.splits.get(&key) {
             return Ok(Some(m));
@@ -335,11 +532,11 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         if self.refused.contains_key(&key) {
             return Ok(None);
         }
-        self.decide_split(key)
+        self.decide_split(key, apex)
     }
 
     /// Whether and where edge `key` (output indices, lower first) splits, by the field.
-    fn decide_split(&mut self, key: (u32, u32)) -> io::Result<Option<u32>> {
+    fn decide_split(&mut self, key: (u32, u32), apex: [DVec3; 3]) -> io::Result<Option<u32>> {
         let (va, vb) = (self.verts[key.0 as usize], self.verts[key.1 as usize]);
         let (pa, pb) = (va.at(), vb.at());
         let len = (pb - pa).length();
@@ -362,6 +559,19 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         if let Some(landed) = along {
             pairs.extend([(ends[0], landed), (landed, ends[1])]);
         }
+        // The triangles beside the edge, checked for folds: the ones recorded for it, not
+        // the asking piece (whose corner may be another split's vertex), so that both sides
+        // come to the same answer.
+        let sides: Vec<[DVec3; 3]> = match self.across.get(&key) {
+            Some(e) if e.seen > 0 => e.apex[..usize::from(e.seen)]
+                .iter()
+                .map(|&(z, forward)| {
+                    let c = self.verts[z as usize].at();
+                    if forward { [pa, pb, c] } else { [pb, pa, c] }
+                })
+                .collect(),
+            _ => vec![apex],
+        };
         // Too near an end, a new vertex would make a sliver (or, written as STL and read
         // back, the same point twice).
         let clear_of_ends = |q: DVec3| (q - pa).length().min((q - pb).length()) >= len * NEAR_END;
@@ -388,12 +598,16 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             candidates.push((self.halves_error(pa, pb, c.0), c));
         }
         candidates.sort_by(|x, y| x.0.total_cmp(&y.0));
-        let chosen = candidates
-            .iter()
-            .map(|c| c.1)
-            .find(|&(q, _)| !self.crowded(q));
+        let mut chosen = None;
+        for &(_, (q, n)) in &candidates {
+            if !self.folds_a_side(&sides, q) && !self.crowded(q) {
+                chosen = Some((q, n));
+                break;
+            }
+        }
         let Some((q, n)) = chosen else {
-            // Every candidate was crowded: a "no" that depends on more than the edge.
+            // Every candidate was crowded or folds a side: a "no" that depends on more than
+            // the edge.
             if !candidates.is_empty() {
                 self.refused.insert(key, 0);
             }
@@ -489,6 +703,46 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         true
     }
 
+    /// Whether splitting the first edge of any of `sides` (triangles, counter-clockwise) at
+    /// `q` leaves a piece facing against the field at its centre where the triangle did not:
+    /// a fold made by the split (a crease point on a far face, joined to corners on another).
+    fn folds_a_side(&mut self, sides: &[[DVec3; 3]], q: DVec3) -> bool {
+        let smallest = FOLD_AREA * self.cell * self.cell;
+        for &[a, b, c] in sides {
+            // Twice the pieces' areas along their normals; small ones are not looked at.
+            let pieces = [[a, q, c], [q, b, c]].map(|[u, v, w]| ((v - u).cross(w - u), u + v + w));
+            if pieces.iter().all(|(f, _)| f.length() * 0.5 < smallest) {
+                continue;
+            }
+            // Pieces within 60° of the triangle cannot face against the field by 154° unless
+            // the field turns by more than 94° between their centres: not worth its probes.
+            let whole = (b - a).cross(c - a);
+            if pieces
+                .iter()
+                .all(|(f, _)| f.dot(whole) >= CREASE_COS * f.length() * whole.length())
+            {
+                continue;
+            }
+            let Some((_, n, _)) = self.probe((a + b + c) / 3.0) else {
+                continue;
+            };
+            if whole.dot(n) < 0.0 {
+                continue;
+            }
+            for (facing, sum) in pieces {
+                if facing.length() * 0.5 < smallest {
+                    continue;
+                }
+                if let Some((_, n, _)) = self.probe(sum / 3.0)
+                    && facing.dot(n) < FOLD_COS * facing.length()
+                {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
     /// Records that one side has been divided at the split edge `a`–`b`; the second side
     /// frees it.
     fn used(&mut self, a: u32, b: u32) {
@@ -497,6 +751,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             e.1 += 1;
             if e.1 >= 2 {
                 self.splits.remove(&key);
+                self.across.remove(&key);
             }
         }
     }
@@ -548,7 +803,8 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             let mut best: Option<(f64, usize, u32)> = None;
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
-                if let Some(m) = self.split(a, b)? {
+                let apex = [a, b, t[(k + 2) % 3]].map(|i| self.verts[i as usize].at());
+                if let Some(m) = self.split(a, b, apex)? {
                     let len = (self.verts[a as usize].at() - self.verts[b as usize].at()).length();
                     if best.is_none_or(|(l, _, _)| len > l) {
                         best = Some((len, k, m));
@@ -557,11 +813,40 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             }
             if let Some((_, k, m)) = best {
                 let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+                // The pieces' new edges, with the triangles beside them: along a-m and m-b
+                // this piece and those recorded across a-b (on this side running the same
+                // way, on the other the opposite way); m-c lies between the two pieces.
+                let recorded: Vec<(u32, bool)> = self
+                    .across
+                    .get(&(a.min(b), a.max(b)))
+                    .map(|e| e.apex[..usize::from(e.seen)].to_vec())
+                    .unwrap_or_default();
+                let this_way = a < b;
+                let along = |x: u32, y: u32| {
+                    let mut v = vec![(c, x < y)];
+                    v.extend(
+                        recorded
+                            .iter()
+                            .filter(|&&(z, _)| z != c)
+                            .map(|&(z, f)| (z, if f == this_way { x < y } else { y < x })),
+                    );
+                    v.truncate(3);
+                    v
+                };
+                let (am, mb) = (along(a, m), along(m, b));
                 self.used(a, b);
+                self.note_across(a, m, &am);
+                self.note_across(m, b, &mb);
+                self.note_across(m, c, &[(a, m < c), (b, c < m)]);
                 self.tessellate([a, m, c], level + 1, centred)?;
                 return self.tessellate([m, b, c], level + 1, centred);
             }
             if !centred && let Some(m) = self.centre(t)? {
+                for k in 0..3 {
+                    // Between pieces (t[k-1], t[k], m) and (t[k], t[k+1], m).
+                    let (prev, next) = (t[(k + 2) % 3], t[(k + 1) % 3]);
+                    self.note_across(t[k], m, &[(prev, t[k] < m), (next, m < t[k])]);
+                }
                 for k in 0..3 {
                     self.tessellate([t[k], t[(k + 1) % 3], m], level + 1, true)?;
                 }
@@ -569,6 +854,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             }
         }
         self.written(t);
+        self.forget_written(t);
         let corners = t.map(|i| self.verts[i as usize].pos);
         self.inner.triangle(t, corners)
     }
@@ -628,7 +914,7 @@ impl<S: Sampler> MeshSink for Refiner<'_, S> {
                 "triangle {t:?} names a vertex not given yet"
             )));
         };
-        self.tessellate([a, b, c], 0, false)
+        self.arrive([a, b, c])
     }
 }
 
@@ -673,6 +959,7 @@ mod tests {
                 .triangle(t, t.map(|i| uniform.vertices[i as usize]))
                 .unwrap();
         }
+        refiner.finish().unwrap();
         (uniform, out)
     }
 
@@ -751,6 +1038,7 @@ mod tests {
                 refiner.vertex(*p).unwrap();
             }
             refiner.triangle(t, t.map(|i| corners[i as usize])).unwrap();
+            refiner.finish().unwrap();
             out.triangles.len()
         };
         assert_eq!(pieces([0, 1, 2]), 3, "facing out: centred");

@@ -59,7 +59,8 @@ pub fn run<S: Sampler>(
     let mut refiner = Refiner::new(sampler, tolerance, &settings.bounds, settings.cell(), sink);
     let mut decimator = Decimator::new(sampler, tolerance, &mut refiner);
     contour_into(sampler, settings, merging, block_shift, &mut decimator)?;
-    decimator.finish().map_err(MeshError::Write)
+    decimator.finish().map_err(MeshError::Write)?;
+    refiner.finish().map_err(MeshError::Write)
 }
 
 /// The octree, the leaves and their polygons, into a sink.
