@@ -24,6 +24,7 @@
 mod check;
 mod dc;
 mod deviation;
+mod int_hash;
 pub mod io;
 mod mesh;
 pub mod samples;

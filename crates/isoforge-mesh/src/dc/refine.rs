@@ -51,7 +51,6 @@
 //! curve_cyl's chords miss by 3.7 tolerances instead of 2.8).
 
 use std::collections::{HashMap, HashSet, VecDeque};
-use std::hash::{BuildHasherDefault, Hasher};
 use std::io;
 
 use glam::DVec3;
@@ -59,6 +58,7 @@ use glam::DVec3;
 use isoforge_field::{Bounds, Interval};
 
 use super::sampler::Sampler;
+use crate::int_hash::IntMap;
 use crate::sink::MeshSink;
 
 /// An edge is split when its middle is farther from the surface than this share of the
@@ -193,11 +193,11 @@ pub struct Refiner<'a, S: Sampler> {
     remap: Vec<u32>,
     /// Split edges (lower, higher output index) that not both sides have used yet: the
     /// middle vertex, and how many sides have.
-    splits: EdgeMap<(u32, u32), (u32, u8)>,
+    splits: IntMap<(u32, u32), (u32, u8)>,
     /// Edges left whole because every place to split them was a hair from another new
     /// vertex (a decision that depends on more than the edge, so it is kept until both
     /// sides have written the edge): how many have.
-    refused: EdgeMap<(u32, u32), u8>,
+    refused: IntMap<(u32, u32), u8>,
     /// New (split) vertices by grid square of [`APART`] cells, latest and older.
     near: HashMap<[i64; 3], Vec<u32>>,
     near_older: HashMap<[i64; 3], Vec<u32>>,
@@ -208,38 +208,13 @@ pub struct Refiner<'a, S: Sampler> {
     locals: HashMap<[i64; 3], S::Local>,
     /// The mesher's triangles waiting for their neighbours, by arrival, with how many of
     /// their edges have not yet been seen from the other side.
-    held: EdgeMap<u64, ([u32; 3], u8)>,
+    held: IntMap<u64, ([u32; 3], u8)>,
     /// Arrival order of the held triangles.
     queue: VecDeque<u64>,
     /// Arrivals so far.
     arrived: u64,
     /// The mesher's edges: the vertices opposite them, in the triangles on either side.
-    across: EdgeMap<(u32, u32), Across>,
-}
-
-/// A map keyed by vertex indices: a multiplicative hash, not SipHash (no key here comes from
-/// outside, and every triangle looks its edges up).
-type EdgeMap<K, V> = HashMap<K, V, BuildHasherDefault<IndexHash>>;
-
-/// Fibonacci hashing of the written integers.
-#[derive(Default)]
-struct IndexHash(u64);
-
-impl Hasher for IndexHash {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
-        }
-    }
-    fn write_u32(&mut self, n: u32) {
-        self.write_u64(u64::from(n));
-    }
-    fn write_u64(&mut self, n: u64) {
-        self.0 = (self.0.rotate_left(5) ^ n).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    }
+    across: IntMap<(u32, u32), Across>,
 }
 
 /// What is known about one of the mesher's edges.
@@ -277,17 +252,17 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             inner,
             verts: Vec::new(),
             remap: Vec::new(),
-            splits: EdgeMap::default(),
-            refused: EdgeMap::default(),
+            splits: IntMap::default(),
+            refused: IntMap::default(),
             near: HashMap::new(),
             near_older: HashMap::new(),
             recent: HashSet::new(),
             older: HashSet::new(),
             locals: HashMap::new(),
-            held: EdgeMap::default(),
+            held: IntMap::default(),
             queue: VecDeque::new(),
             arrived: 0,
-            across: EdgeMap::default(),
+            across: IntMap::default(),
         }
     }
 

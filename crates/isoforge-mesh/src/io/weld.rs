@@ -2,43 +2,14 @@
 //! one vertex. STL and 3MF-less soups need it; the checker can only see shared edges once
 //! corners are shared.
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use super::ParseError;
+use crate::int_hash::IntMap;
 use crate::mesh::Mesh;
-
-/// A small multiplicative hasher for 12-byte position keys. The std SipHash costs about
-/// three times as much per lookup, and the keys here are not attacker-chosen in a way that
-/// matters (a colliding file is only slower, never wrong).
-#[derive(Default)]
-pub(crate) struct PosHasher(u64);
-
-impl Hasher for PosHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
-        }
-    }
-    fn write_u32(&mut self, v: u32) {
-        self.write_u64(u64::from(v));
-    }
-    fn write_u64(&mut self, v: u64) {
-        // FxHash's step: rotate, xor, multiply by a large odd constant.
-        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-    fn write_usize(&mut self, v: usize) {
-        self.write_u64(v as u64);
-    }
-}
 
 /// Builds an indexed mesh from positions, merging exact duplicates (with `-0.0` taken as
 /// `0.0`). Vertices keep the order in which they were first seen.
 pub(crate) struct Welder {
-    map: HashMap<[u32; 3], u32, BuildHasherDefault<PosHasher>>,
+    map: IntMap<[u32; 3], u32>,
     mesh: Mesh,
 }
 
@@ -48,7 +19,7 @@ impl Welder {
         // An closed mesh has about half as many vertices as triangles; cap the guess so a
         // lying header cannot make us reserve gigabytes.
         let tris = triangles.min(1 << 24);
-        let mut map = HashMap::default();
+        let mut map = IntMap::default();
         map.reserve(tris / 2 + 16);
         Welder {
             map,
