@@ -13,13 +13,14 @@
 //!   `a` and `b` has come) and neither vertex has been written out;
 //! * the link condition (the vertices next to both `a` and `b` are exactly the two
 //!   opposite the edge) keeps the mesh a closed 2-manifold (Dey et al. 1999); no triangle
-//!   may turn more than 60°, face against the field's gradient, or sweep more than a
-//!   little volume;
+//!   may turn more than 60° (unless it spans a crease and faces out at its corners), face
+//!   against the field's gradient, or sweep more than a little volume;
 //! * the tolerance: sample points on every new triangle within it by the field (|F| /
 //!   |∇F|, exact inside a convex crease, where chords run); around a crease, where dual
 //!   contouring's own triangles already miss it, as much as they did and at most twice it;
-//! * only crease vertices, or vertices where the area-weighted quadric says the surface is
-//!   flat, are tried: smooth parts are already as coarse as the octree merge allows.
+//! * only crease vertices, vertices where the area-weighted quadric says the surface is
+//!   flat, and collapses onto a crease vertex are tried: smooth parts are already as coarse
+//!   as the octree merge allows.
 //!
 //! Memory stays bounded: up to [`CHUNK`] triangles are held and collapsed at the end; a
 //! larger mesh goes on unchanged once it outgrows that. (Collapsing chunk by chunk, open
@@ -74,6 +75,10 @@ const FACING_COS: f64 = -0.5;
 /// of the 256 sign patterns turned inside out; at 2 the turned cube at depth 9 is 1,576
 /// triangles (2,896 with no allowance).
 const CREASE_ALLOWANCE: f64 = 2.0;
+
+/// A collapse tried only because its target is a crease vertex keeps within this share of
+/// the tolerance (the refiner's split threshold).
+const ONTO_CREASE_SHARE: f64 = 0.8;
 
 /// Two normals around a vertex that differ by more than this (cosine, 84°) make it a
 /// crease or corner vertex. At 0.3 and 0.8 DC's small triangles on the gyroid counted as
@@ -395,11 +400,14 @@ impl Chunk {
         }
         let mut heap = BinaryHeap::new();
         // Crease vertices are tried whatever their quadric (the triangles cutting the
-        // crease weigh in it); elsewhere only where the surface is flat.
+        // crease weigh in it), and so are collapses onto them: a face's vertex a fraction
+        // of a cell from a crease has the triangles cutting it in its quadric but is no
+        // crease vertex itself, and it stops every collapse along the crease past it (the
+        // triangles between would turn over). Elsewhere only where the surface is flat.
         let push = |c: &Chunk, heap: &mut BinaryHeap<_>, b: u32, a: u32| {
             if c.free[b as usize] && c.free[a as usize] {
                 let cost = c.cost(b, a);
-                if c.crease[b as usize] || cost <= flat {
+                if c.crease[b as usize] || c.crease[a as usize] || cost <= flat {
                     heap.push(Reverse((cost.to_bits(), b, a)));
                 }
             }
@@ -501,14 +509,24 @@ impl Chunk {
                 return false;
             }
             let turn = n_new.normalize().dot(n_old.normalize_or_zero());
-            if turn.is_nan() || turn < MIN_TURN_COS {
+            if turn.is_nan() || turn < MIN_TURN_COS && !self.spans_crease_facing_out(d, &new) {
                 return false;
             }
             new_tris.push(new);
         }
+        // A collapse tried only because `a` is on a crease keeps a margin, as the refiner's
+        // splits do: the field's first-order distance reads a little less than the
+        // distance along the gradient that `check --against` measures (at the full
+        // tolerance, sphere_circle at depth 8 missed it by 1.001 tolerances).
+        let flat = (d.tolerance * FLAT_SHARE).powi(2);
+        let bound = if self.crease[b as usize] || self.cost(b, a) <= flat {
+            d.tolerance
+        } else {
+            ONTO_CREASE_SHARE * d.tolerance
+        };
         if new_tris
             .iter()
-            .all(|t| self.deviation(d, t, d.tolerance, true) <= d.tolerance)
+            .all(|t| self.deviation(d, t, bound, true) <= bound)
         {
             return true;
         }
@@ -528,6 +546,26 @@ impl Chunk {
             && new_tris
                 .iter()
                 .all(|t| self.deviation(d, t, allowance, true) <= allowance)
+    }
+
+    /// Whether triangle `t` spans a crease (the field's normals at two corners more than
+    /// [`CREASE_COS`] apart) and faces out at all three corners. Such a triangle may turn
+    /// by more than [`MIN_TURN_COS`]: dual contouring leaves triangles across a crease
+    /// whose normals run along it, and moving a crease vertex along the crease turns them
+    /// while the faces beside stay flat (on the turned cube at depth 9 the turn limit
+    /// refused more collapses along its edges than every other check together).
+    fn spans_crease_facing_out<S: Sampler>(
+        &self,
+        d: &mut Decimator<'_, S>,
+        t: &[DVec3; 3],
+    ) -> bool {
+        let normal = (t[1] - t[0]).cross(t[2] - t[0]);
+        let g = t.map(|p| {
+            let g = d.sampler.grad(&mut d.ev, &d.root, p.to_array());
+            DVec3::new(g[1], g[2], g[3]).normalize_or_zero()
+        });
+        let spans = (0..3).any(|k| g[k].dot(g[(k + 1) % 3]) < CREASE_COS);
+        spans && g.iter().all(|x| x.dot(normal) > 0.0)
     }
 
     /// The largest distance from the surface, by the field, of a triangle's sample

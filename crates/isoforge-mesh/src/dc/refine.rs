@@ -107,10 +107,20 @@ const HELD_MAX: usize = 1 << 18;
 /// held the tolerance (1.8 and 2.5 tolerances), the chords along their creases unsplit.
 const FOLD_COS: f64 = -0.9;
 
-/// Pieces smaller than this many square finest cells are not checked for folds: at creases
-/// dual contouring leaves small folds of its own, and the splits that hold the tolerance
-/// there may keep one (checked at any size, spaceship went from 5.6 to 6.1 tolerances).
+/// Pieces smaller than this many square finest cells are folds only where they also face
+/// against the normals at all three corners: at creases the field at a small piece's centre
+/// may be the other face's, and dual contouring leaves small folds of its own (checked at the
+/// centre alone at any size, and with [`EDGE_ON_COS`] at 154°, spaceship went from 5.6 to 6.3
+/// tolerances and spheres_chain from 0.8 to 2.0). Not looked at, a ball under two cells
+/// wide, clipped by the region's corner and collapsed to six triangles, was split inside out.
 const FOLD_AREA: f64 = 0.25;
+
+/// A triangle facing against the field at its centre by more than this (cosine, 96°) is a
+/// fold already, and its pieces are not checked. One nearer edge-on is not: on the ball of
+/// [`FOLD_AREA`] the first bad split was of a triangle edge-on to the field (cosine −0.016)
+/// into pieces facing against it by 170°, and at 90° it was passed over. At 107° (cosine
+/// −0.3) spheres_chain no longer held the tolerance (1.8 tolerances).
+const EDGE_ON_COS: f64 = -0.1;
 
 /// Two vertex normals closer than this (cosine, 60°) do not make a crease between them.
 const CREASE_COS: f64 = 0.5;
@@ -499,7 +509,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
 
     /// The middle vertex of edge `a`–`b`, if it is split (made now, or found from the other
     /// side). The decision depends only on the two vertices, in index order.
-    fn split(&mut self, a: u32, b: u32, apex: [DVec3; 3]) -> io::Result<Option<u32>> {
+    fn split(&mut self, a: u32, b: u32, apex: [(DVec3, DVec3); 3]) -> io::Result<Option<u32>> {
         let key = (a.min(b), a.max(b));
         if let Some(&(m, _)) = self.splits.get(&key) {
             return Ok(Some(m));
@@ -511,7 +521,11 @@ impl<'a, S: Sampler> Refiner<'a, S> {
     }
 
     /// Whether and where edge `key` (output indices, lower first) splits, by the field.
-    fn decide_split(&mut self, key: (u32, u32), apex: [DVec3; 3]) -> io::Result<Option<u32>> {
+    fn decide_split(
+        &mut self,
+        key: (u32, u32),
+        apex: [(DVec3, DVec3); 3],
+    ) -> io::Result<Option<u32>> {
         let (va, vb) = (self.verts[key.0 as usize], self.verts[key.1 as usize]);
         let (pa, pb) = (va.at(), vb.at());
         let len = (pb - pa).length();
@@ -537,12 +551,14 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         // The triangles beside the edge, checked for folds: the ones recorded for it, not
         // the asking piece (whose corner may be another split's vertex), so that both sides
         // come to the same answer.
-        let sides: Vec<[DVec3; 3]> = match self.across.get(&key) {
+        let (ea, eb) = ((pa, va.normal()), (pb, vb.normal()));
+        let sides: Vec<[(DVec3, DVec3); 3]> = match self.across.get(&key) {
             Some(e) if e.seen > 0 => e.apex[..usize::from(e.seen)]
                 .iter()
                 .map(|&(z, forward)| {
-                    let c = self.verts[z as usize].at();
-                    if forward { [pa, pb, c] } else { [pb, pa, c] }
+                    let v = self.verts[z as usize];
+                    let c = (v.at(), v.normal());
+                    if forward { [ea, eb, c] } else { [eb, ea, c] }
                 })
                 .collect(),
             _ => vec![apex],
@@ -575,7 +591,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         candidates.sort_by(|x, y| x.0.total_cmp(&y.0));
         let mut chosen = None;
         for &(_, (q, n)) in &candidates {
-            if !self.folds_a_side(&sides, q) && !self.crowded(q) {
+            if !self.folds_a_side(&sides, (q, n)) && !self.crowded(q) {
                 chosen = Some((q, n));
                 break;
             }
@@ -678,34 +694,47 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         true
     }
 
-    /// Whether splitting the first edge of any of `sides` (triangles, counter-clockwise) at
-    /// `q` leaves a piece facing against the field at its centre where the triangle did not:
-    /// a fold made by the split (a crease point on a far face, joined to corners on another).
-    fn folds_a_side(&mut self, sides: &[[DVec3; 3]], q: DVec3) -> bool {
+    /// Whether splitting the first edge of any of `sides` (triangles, counter-clockwise, with
+    /// their corners' normals) at `q` (with its normal) leaves a piece facing against the
+    /// field at its centre where the triangle did not: a fold made by the split (a crease
+    /// point on a far face, joined to corners on another).
+    fn folds_a_side(&mut self, sides: &[[(DVec3, DVec3); 3]], (q, nq): (DVec3, DVec3)) -> bool {
         let smallest = FOLD_AREA * self.cell * self.cell;
-        for &[a, b, c] in sides {
-            // Twice the pieces' areas along their normals; small ones are not looked at.
-            let pieces = [[a, q, c], [q, b, c]].map(|[u, v, w]| ((v - u).cross(w - u), u + v + w));
-            if pieces.iter().all(|(f, _)| f.length() * 0.5 < smallest) {
+        for &[(a, na), (b, nb), (c, nc)] in sides {
+            // Twice the pieces' areas along their normals, with their corners' normals.
+            let pieces = [[(a, na), (q, nq), (c, nc)], [(q, nq), (b, nb), (c, nc)]]
+                .map(|[(u, nu), (v, nv), (w, nw)]| ((v - u).cross(w - u), u + v + w, [nu, nv, nw]));
+            let whole = (b - a).cross(c - a);
+            // A small piece is a fold only where it also faces against every corner's
+            // normal: at a crease the field at its centre may be the other face's.
+            let exempt = pieces.map(|(f, _, normals)| {
+                f.length() * 0.5 < smallest && normals.iter().any(|m| f.dot(*m) >= 0.0)
+            });
+            if exempt.iter().all(|&e| e) {
                 continue;
             }
             // Pieces within 60° of the triangle cannot face against the field by 154° unless
             // the field turns by more than 94° between their centres: not worth its probes.
-            let whole = (b - a).cross(c - a);
-            if pieces
+            // A piece larger than twice its triangle (a sliver's edge split far off it) is
+            // checked whatever the triangle's facing: a sliver's normal says little.
+            let grows = pieces
                 .iter()
-                .all(|(f, _)| f.dot(whole) >= CREASE_COS * f.length() * whole.length())
+                .any(|(f, _, _)| f.length() > 2.0 * whole.length());
+            if !grows
+                && pieces
+                    .iter()
+                    .all(|(f, _, _)| f.dot(whole) >= CREASE_COS * f.length() * whole.length())
             {
                 continue;
             }
             let Some((_, n, _)) = self.probe((a + b + c) / 3.0) else {
                 continue;
             };
-            if whole.dot(n) < 0.0 {
+            if !grows && whole.dot(n) < EDGE_ON_COS * whole.length() {
                 continue;
             }
-            for (facing, sum) in pieces {
-                if facing.length() * 0.5 < smallest {
+            for ((facing, sum, _), exempt) in pieces.into_iter().zip(exempt) {
+                if exempt {
                     continue;
                 }
                 if let Some((_, n, _)) = self.probe(sum / 3.0)
@@ -778,7 +807,10 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             let mut best: Option<(f64, usize, u32)> = None;
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
-                let apex = [a, b, t[(k + 2) % 3]].map(|i| self.verts[i as usize].at());
+                let apex = [a, b, t[(k + 2) % 3]].map(|i| {
+                    let v = self.verts[i as usize];
+                    (v.at(), v.normal())
+                });
                 if let Some(m) = self.split(a, b, apex)? {
                     let len = (self.verts[a as usize].at() - self.verts[b as usize].at()).length();
                     if best.is_none_or(|(l, _, _)| len > l) {
