@@ -636,11 +636,20 @@ fn a_ball_under_two_cells_at_a_corner_stays_outward() {
         [1.0444, 0.810_136_005_709_886_3, 0.840_101],
     )
     .expect("a box");
+    stays_outward_at_large_tolerances(&shape, bounds, 3, "small ball at a corner");
+}
+
+/// Meshes a small closed shape at tolerances of half a cell, 3 and 50 cells, and checks it
+/// comes out the right way round (positive volume), as well as closed.
+fn stays_outward_at_large_tolerances(shape: &Shape, bounds: Bounds, depth: u8, what: &str) {
     for cells in [0.5, 3.0, 50.0] {
-        let mut settings = MeshSettings::new(bounds, 3);
+        let mut settings = MeshSettings::new(bounds, depth);
         settings.tolerance = Some(cells * settings.cell());
-        let (_, volume) = mesh_ok_with(&shape, &settings, "small ball at a corner");
-        assert!(volume > 0.0, "tolerance {cells} cells: volume {volume}");
+        let (_, volume) = mesh_ok_with(shape, &settings, what);
+        assert!(
+            volume > 0.0,
+            "{what}, tolerance {cells} cells: volume {volume}"
+        );
     }
 }
 
@@ -692,10 +701,5 @@ fn a_small_lens_at_a_large_tolerance_stays_outward() {
         [1.054_656_847_965_304, 1.043_138_535_999_414_3, 0.8],
     )
     .expect("a box");
-    for cells in [0.5, 3.0, 50.0] {
-        let mut settings = MeshSettings::new(bounds, 4);
-        settings.tolerance = Some(cells * settings.cell());
-        let (_, volume) = mesh_ok_with(&shape, &settings, "small lens");
-        assert!(volume > 0.0, "tolerance {cells} cells: volume {volume}");
-    }
+    stays_outward_at_large_tolerances(&shape, bounds, 4, "small lens");
 }
