@@ -395,10 +395,16 @@ impl Chunk {
         q.mean_at(self.pos[a as usize] - self.origin)
     }
 
+    /// Whether collapsing `b` (at quadric cost `cost`) would be tried whatever its target:
+    /// `b` is a crease vertex, or the surface there is flat.
+    fn tried_for_itself(&self, b: u32, cost: f64, flat: f64) -> bool {
+        self.crease[b as usize] || cost <= flat
+    }
+
     /// Greedy collapses, cheapest first, in rounds until a round finds none (a collapse
     /// can unblock one next to it that was refused before).
     fn collapse<S: Sampler>(&mut self, d: &mut Decimator<'_, S>) {
-        let flat = (d.tolerance * FLAT_SHARE).powi(2);
+        let flat = flat_cost(d.tolerance);
         if flat.is_nan() || flat <= 0.0 {
             return;
         }
@@ -411,7 +417,7 @@ impl Chunk {
         let push = |c: &Chunk, heap: &mut BinaryHeap<_>, b: u32, a: u32| {
             if c.free[b as usize] && c.free[a as usize] {
                 let cost = c.cost(b, a);
-                if c.crease[b as usize] || c.crease[a as usize] || cost <= flat {
+                if c.tried_for_itself(b, cost, flat) || c.crease[a as usize] {
                     heap.push(Reverse((cost.to_bits(), b, a)));
                 }
             }
@@ -522,8 +528,7 @@ impl Chunk {
         // splits do: the field's first-order distance reads a little less than the
         // distance along the gradient that `check --against` measures (at the full
         // tolerance, sphere_circle at depth 8 missed it by 1.001 tolerances).
-        let flat = (d.tolerance * FLAT_SHARE).powi(2);
-        let bound = if self.crease[b as usize] || self.cost(b, a) <= flat {
+        let bound = if self.tried_for_itself(b, self.cost(b, a), flat_cost(d.tolerance)) {
             d.tolerance
         } else {
             ONTO_CREASE_SHARE * d.tolerance
@@ -738,6 +743,11 @@ impl Chunk {
             None => d.frozen.get(&self.input[v]).map_or([0.0; 3], |f| f.pos),
         }
     }
+}
+
+/// The quadric cost under which a vertex counts as on a flat surface (see [`FLAT_SHARE`]).
+fn flat_cost(tolerance: f64) -> f64 {
+    (tolerance * FLAT_SHARE).powi(2)
 }
 
 /// True when a triangle's height is below [`SLIVER`] of its longest side.
