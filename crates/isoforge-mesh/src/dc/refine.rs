@@ -122,6 +122,20 @@ const FOLD_AREA: f64 = 0.25;
 /// −0.3) spheres_chain no longer held the tolerance (1.8 tolerances).
 const EDGE_ON_COS: f64 = -0.1;
 
+/// A split whose two sides face against the way it moves the edge's middle by more than
+/// this (cosine, 120°, weighted by area) is passed over: the sides are folded already, and
+/// moving the middle onto the surface folds them further, taking volume away where the
+/// surface says it should grow. A ball half a cell wide, collapsed to a tetrahedron with one
+/// corner at the ball's centre, was split inside out (cosine −0.94). At 96° spheres_chain no
+/// longer held the tolerance (its grooves' folded triangles face against the move by −0.21 to
+/// −0.48).
+const AGAINST_MOVE_COS: f64 = 0.5;
+
+/// Triangles lower than this share of their longest side are slivers, whose facing is left
+/// out of [`AGAINST_MOVE_COS`]: along drope_block's ridge, pairs of slivers folded over it
+/// face against the move, and without their splits it missed the tolerance (2.3).
+const THIN: f64 = 0.1;
+
 /// Two vertex normals closer than this (cosine, 60°) do not make a crease between them.
 const CREASE_COS: f64 = 0.5;
 
@@ -534,10 +548,11 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         if level >= MAX_SPLITS || len < SHORTEST * self.cell || !self.may_stray(&va, &vb, len) {
             return Ok(None);
         }
-        match self.probe(mid) {
-            Some((_, _, d)) if d > self.tolerance * SPLIT_SHARE => {}
+        // +1 where the middle is inside the solid (a split moves it outward), −1 outside.
+        let outward = match self.probe(mid) {
+            Some((f, _, d)) if d > self.tolerance * SPLIT_SHARE => -f.signum(),
             _ => return Ok(None),
-        }
+        };
         let reach = len * MID_REACH;
         let along = self.onto_surface(mid, reach);
         // Where tangent planes meet: the ends' (a crease between them), and, when one end
@@ -591,7 +606,10 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         candidates.sort_by(|x, y| x.0.total_cmp(&y.0));
         let mut chosen = None;
         for &(_, (q, n)) in &candidates {
-            if !self.folds_a_side(&sides, (q, n)) && !self.crowded(q) {
+            if !self.folds_a_side(&sides, (q, n))
+                && !shrinks_against_the_move(&sides, q, outward)
+                && !self.crowded(q)
+            {
                 chosen = Some((q, n));
                 break;
             }
@@ -881,6 +899,33 @@ fn both_planes_step(f1: f64, g1: DVec3, f2: f64, g2: DVec3) -> Option<DVec3> {
     let alpha = (-f1 * a22 + a12 * f2) / det;
     let beta = (-f2 * a11 + a12 * f1) / det;
     Some(g1 * alpha + g2 * beta)
+}
+
+/// Whether moving the middle of a split edge to `q` changes the volume its two sides
+/// enclose against the move (`outward` is +1 where the middle is inside the solid, so the
+/// move is outward, −1 where it is outside): the sides together face away from where the
+/// surface is, and the split would fold them further. Each side's change is a sixth of the
+/// move dotted with its area vector (twice the area, along its normal). Only with both
+/// sides known, and neither a sliver, whose normal says little.
+fn shrinks_against_the_move(sides: &[[(DVec3, DVec3); 3]], q: DVec3, outward: f64) -> bool {
+    if sides.len() < 2 {
+        return false;
+    }
+    let (mut along, mut scale) = (0.0, 0.0);
+    for &[(a, _), (b, _), (c, _)] in sides {
+        let whole = (b - a).cross(c - a);
+        let longest2 = [b - a, c - b, a - c]
+            .map(DVec3::length_squared)
+            .into_iter()
+            .fold(0.0, f64::max);
+        if whole.length() < THIN * longest2 {
+            return false;
+        }
+        let moved = q - (a + b) * 0.5;
+        along += outward * moved.dot(whole);
+        scale += moved.length() * whole.length();
+    }
+    along < -AGAINST_MOVE_COS * scale
 }
 
 /// Where two tangent planes (a point and its unit normal) on either side of a crease meet,
