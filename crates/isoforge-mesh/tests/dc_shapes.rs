@@ -718,3 +718,35 @@ fn a_ball_a_cell_wide_stays_outward() {
     let bounds = Bounds::new([-0.88375, -0.99051, -1.21298], [0.8, 0.8, 1.07118]).expect("a box");
     stays_outward_at_large_tolerances(&shape, bounds, 3, "ball a cell wide");
 }
+
+/// A ball a cell and a half wide, bitten by another and cut by the region's wall (a seed of
+/// the random CSG test, session 24): the collapses leave a flat tetrahedron, and a split
+/// onto the wall moved an edge's middle outward while taking more volume than the
+/// tetrahedron held (volume −0.00006 at half a cell).
+#[test]
+fn a_bitten_ball_at_the_region_wall_stays_outward() {
+    let (shape, _) = random_shape(
+        [7, 4, 3],
+        0.215_760_316_314_230_65,
+        vec![(
+            [
+                0.592_269_309_466_332_8,
+                0.189_534_713_153_821_7,
+                -0.195_900_753_414_860_07,
+            ],
+            0.212_850_235_540_150_7,
+            2,
+            [0.0; 3],
+        )],
+    );
+    let bounds = Bounds::new(
+        [
+            -1.146_620_214_538_688,
+            -1.086_509_515_661_507_9,
+            -1.187_188_619_575_830_8,
+        ],
+        [0.899_501_652_294_758_8, 1.244_573_292_690_346_1, 0.8],
+    )
+    .expect("a box");
+    stays_outward_at_large_tolerances(&shape, bounds, 3, "bitten ball");
+}

@@ -122,18 +122,9 @@ const FOLD_AREA: f64 = 0.25;
 /// −0.3) spheres_chain no longer held the tolerance (1.8 tolerances).
 const EDGE_ON_COS: f64 = -0.1;
 
-/// A split whose two sides face against the way it moves the edge's middle by more than
-/// this (cosine, 120°, weighted by area) is passed over: the sides are folded already, and
-/// moving the middle onto the surface folds them further, taking volume away where the
-/// surface says it should grow. A ball half a cell wide, collapsed to a tetrahedron with one
-/// corner at the ball's centre, was split inside out (cosine −0.94). At 96° spheres_chain no
-/// longer held the tolerance (its grooves' folded triangles face against the move by −0.21 to
-/// −0.48).
-const AGAINST_MOVE_COS: f64 = 0.5;
-
-/// Triangles lower than this share of their longest side are slivers, whose facing is left
-/// out of [`AGAINST_MOVE_COS`]: along drope_block's ridge, pairs of slivers folded over it
-/// face against the move, and without their splits it missed the tolerance (2.3).
+/// Triangles lower than this share of their longest side are slivers, left out of
+/// [`inverts_the_wedge`]: along drope_block's ridge, pairs of slivers folded over it fail
+/// it, and without their splits drope_block missed the tolerance (2.3 tolerances).
 const THIN: f64 = 0.1;
 
 /// Two vertex normals closer than this (cosine, 60°) do not make a crease between them.
@@ -607,7 +598,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         let mut chosen = None;
         for &(_, (q, n)) in &candidates {
             if !self.folds_a_side(&sides, (q, n))
-                && !shrinks_against_the_move(&sides, q, outward)
+                && !inverts_the_wedge(&sides, q, outward)
                 && !self.crowded(q)
             {
                 chosen = Some((q, n));
@@ -901,31 +892,44 @@ fn both_planes_step(f1: f64, g1: DVec3, f2: f64, g2: DVec3) -> Option<DVec3> {
     Some(g1 * alpha + g2 * beta)
 }
 
-/// Whether moving the middle of a split edge to `q` changes the volume its two sides
-/// enclose against the move (`outward` is +1 where the middle is inside the solid, so the
-/// move is outward, −1 where it is outside): the sides together face away from where the
-/// surface is, and the split would fold them further. Each side's change is a sixth of the
-/// move dotted with its area vector (twice the area, along its normal). Only with both
-/// sides known, and neither a sliver, whose normal says little.
-fn shrinks_against_the_move(sides: &[[(DVec3, DVec3); 3]], q: DVec3, outward: f64) -> bool {
-    if sides.len() < 2 {
+/// Whether moving the middle of a split edge outward to `q` takes volume away and leaves
+/// the wedge of its two sides (the tetrahedron of the edge and their far corners, positive
+/// where the surface is convex across the edge) inside out: the split folds the sides over,
+/// and a small closed blob can turn inside out (a ball a cell wide did). `outward` is +1
+/// where the middle is inside the solid. A side's change of volume is a sixth of the move
+/// dotted with its area vector (twice the area, along its normal). Only with both sides
+/// known, and neither a sliver, whose facing says little; and only outward: inward moves
+/// adding volume to convex wedges along spheres_chain's grooves fail the mirrored test, and
+/// without those splits it missed the tolerance (2.0 tolerances).
+fn inverts_the_wedge(sides: &[[(DVec3, DVec3); 3]], q: DVec3, outward: f64) -> bool {
+    // The first side, and the first that runs along the edge the other way (a piece's
+    // edge may also have the corners of the triangles split beside it).
+    let Some(&[(a, _), (b, _), (c, _)]) = sides.first() else {
         return false;
-    }
-    let (mut along, mut scale) = (0.0, 0.0);
-    for &[(a, _), (b, _), (c, _)] in sides {
-        let whole = (b - a).cross(c - a);
-        let longest2 = [b - a, c - b, a - c]
+    };
+    let Some(d) = sides
+        .iter()
+        .find(|s| s[0].0 == b && s[1].0 == a)
+        .map(|s| s[2].0)
+    else {
+        return false;
+    };
+    let thin = |[u, v, w]: [DVec3; 3]| {
+        let longest2 = [v - u, w - v, u - w]
             .map(DVec3::length_squared)
             .into_iter()
             .fold(0.0, f64::max);
-        if whole.length() < THIN * longest2 {
-            return false;
-        }
-        let moved = q - (a + b) * 0.5;
-        along += outward * moved.dot(whole);
-        scale += moved.length() * whole.length();
+        (v - u).cross(w - u).length() < THIN * longest2
+    };
+    if outward <= 0.0 || thin([a, b, c]) || thin([b, a, d]) {
+        return false;
     }
-    along < -AGAINST_MOVE_COS * scale
+    let moved = q - (a + b) * 0.5;
+    let (abc, bad) = ((b - a).cross(c - a), (a - b).cross(d - b));
+    // Six times the volumes.
+    let change = moved.dot(abc) + moved.dot(bad);
+    let wedge = -(d - a).dot(abc);
+    change < 0.0 && wedge + change < 0.0
 }
 
 /// Where two tangent planes (a point and its unit normal) on either side of a crease meet,
