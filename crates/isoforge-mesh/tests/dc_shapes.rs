@@ -750,3 +750,22 @@ fn a_bitten_ball_at_the_region_wall_stays_outward() {
     .expect("a box");
     stays_outward_at_large_tolerances(&shape, bounds, 3, "bitten ball");
 }
+
+/// A ball under a cell wide at tolerances of 3 cells and more (a seed of the random CSG
+/// test, session 24): the octree's merge, held only to the tolerance, puts a vertex 1.6 cells
+/// from the ball, too far for the refiner to move it onto the surface, and splits of the
+/// edges beside it, onto the ball, left it inside out (volume −0.0000005).
+#[test]
+fn a_ball_under_a_cell_wide_at_a_large_tolerance_stays_outward() {
+    let (shape, _) = random_shape([2, 2, 1], 0.05, vec![]);
+    let bounds = Bounds::new(
+        [
+            -1.065_792_738_350_205_5,
+            -1.037_820_307_699_847_8,
+            -0.979_120_525_940_286_9,
+        ],
+        [0.8, 1.102_718_866_316_366_3, 0.8],
+    )
+    .expect("a box");
+    stays_outward_at_large_tolerances(&shape, bounds, 4, "ball under a cell");
+}

@@ -79,6 +79,15 @@ const MOVE_SHARE: f64 = 0.5;
 /// one-cell blob of a random CSG test (tolerance half a cell) turned inside out.
 const REACH: f64 = 0.25;
 
+/// A mesher's vertex farther from the surface than this many finest cells (by the field's
+/// first-order distance) that could not be moved onto it within [`REACH`] takes no splits
+/// on its edges: pieces joining a point on the surface to one so far off make spikes, and
+/// on a ball under a cell wide at a tolerance of 3 cells (the merge put a vertex 1.6 cells
+/// from it) they turned the ball inside out. Of the fixtures at depth 8 only spaceship has
+/// such vertices (about a hundred); with every vertex the refiner could not move left
+/// unsplit, its largest distance went from 5.3 to 6.4 tolerances, at 0.9 cells it stays 5.3.
+const STRAY_CELLS: f64 = 0.9;
+
 /// Edges shorter than this many finest cells are never split. A crease cut by a chord of
 /// length `l` is missed by at most about `l/2`, so this bounds the error at creases to
 /// about 0.03 of a cell whatever the tolerance asked.
@@ -178,6 +187,9 @@ struct Vert {
     /// 0 for the mesher's vertices; one more than the higher end's for a split edge's
     /// middle.
     level: u8,
+    /// A mesher's vertex left far off the surface (see [`STRAY_CELLS`]): edges to it are
+    /// not split.
+    stray: bool,
 }
 
 impl Vert {
@@ -481,6 +493,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             pos,
             normal: normal.as_vec3().to_array(),
             level,
+            stray: false,
         });
         Ok(id)
     }
@@ -536,7 +549,12 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         let len = (pb - pa).length();
         let level = va.level.max(vb.level);
         let mid = (pa + pb) * 0.5;
-        if level >= MAX_SPLITS || len < SHORTEST * self.cell || !self.may_stray(&va, &vb, len) {
+        if level >= MAX_SPLITS
+            || va.stray
+            || vb.stray
+            || len < SHORTEST * self.cell
+            || !self.may_stray(&va, &vb, len)
+        {
             return Ok(None);
         }
         // +1 where the middle is inside the solid (a split moves it outward), −1 outside.
@@ -951,14 +969,20 @@ fn crease_point((pa, na): (DVec3, DVec3), (pb, nb): (DVec3, DVec3), mid: DVec3) 
 impl<S: Sampler> MeshSink for Refiner<'_, S> {
     fn vertex(&mut self, p: [f32; 3]) -> io::Result<()> {
         let at = DVec3::from(p.map(f64::from));
+        let mut stray = false;
         let (pos, normal) = match self.probe(at) {
             Some((_, n, d)) if d > self.tolerance * MOVE_SHARE => {
-                self.onto_surface(at, REACH * self.cell).unwrap_or((at, n))
+                let moved = self.onto_surface(at, REACH * self.cell);
+                stray = moved.is_none() && d > STRAY_CELLS * self.cell;
+                moved.unwrap_or((at, n))
             }
             Some((_, n, _)) => (at, n),
             None => (at, DVec3::ZERO),
         };
         let id = self.emit_vertex(pos, normal, 0)?;
+        if stray && let Some(v) = self.verts.get_mut(id as usize) {
+            v.stray = true;
+        }
         self.remap.push(id);
         Ok(())
     }
