@@ -34,6 +34,12 @@
 //! the pieces lay on a face the wrong way round: up to 8 % of the area folded, the surface
 //! 19 % larger than the cube's at depth 6.
 //!
+//! Nor may a split turn a small closed blob inside out (blobs a cell or two wide, at
+//! tolerances of half a cell and more, did): a split that moves an edge's middle outward
+//! while taking volume away is passed over when it leaves the wedge of its two sides inside
+//! out ([`inverts_the_wedge`]), and a mesher's vertex left far off the surface takes no
+//! splits on its edges ([`STRAY_CELLS`]).
+//!
 //! Why the mesh stays closed and manifold: whether and where an edge splits is decided
 //! once, when the first triangle beside it asks, and the second reads the answer: a split's
 //! new vertex is kept in a map until both sides have used it. A "no" depends on the edge
