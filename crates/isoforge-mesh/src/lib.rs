@@ -16,7 +16,7 @@
 //!
 //! The data flow: shape → `isoforge_field::ClippedField` (the model clipped to
 //! `MeshSettings::bounds`) → the dual-contouring stages in `dc/` (octree, hermite data,
-//! cells and QEF vertices, contour; see `dc/mod.rs`) → [`Mesh`] → [`check`] and [`io`].
+//! cells and QEF vertices, contour; see `dc/mod.rs`) → [`Mesh`] → [`check`](fn@check) and [`io`].
 //! Only the mesh type, the settings, `mesh_shape`/`try_mesh_shape`, the checker, the
 //! readers and writers, and sample meshes ([`samples`]) are public: the mesher's stages
 //! are internal, tested in the crate.
