@@ -769,3 +769,21 @@ fn a_ball_under_a_cell_wide_at_a_large_tolerance_stays_outward() {
     .expect("a box");
     stays_outward_at_large_tolerances(&shape, bounds, 4, "ball under a cell");
 }
+
+/// A ball under a cell wide at half a cell's tolerance (a seed of the random CSG test,
+/// session 24): the collapses brought it down to four vertices nearly in one plane, and the
+/// last collapse left the tetrahedron inside out (volume −0.0000006).
+#[test]
+fn a_ball_collapsed_to_a_tetrahedron_stays_outward() {
+    let (shape, _) = random_shape([4, 2, 5], 0.056_493_235_359_138_19, vec![]);
+    let bounds = Bounds::new(
+        [
+            -1.188_798_893_751_215_3,
+            -1.065_741_290_968_041_7,
+            -1.057_994_805_369_056,
+        ],
+        [0.8, 1.023_084_629_094_039_9, 0.8],
+    )
+    .expect("a box");
+    stays_outward_at_large_tolerances(&shape, bounds, 4, "ball down to a tetrahedron");
+}

@@ -480,8 +480,10 @@ impl Chunk {
         {
             return false;
         }
-        // `a` keeps at least three neighbours, or a tetrahedron would fold flat.
-        if na.len() + nb.len() - shared.len() - 2 < 3 {
+        // `a` keeps at least three neighbours, or a tetrahedron would fold flat; with three,
+        // a closed tetrahedron must stay the right way out.
+        let kept = na.len() + nb.len() - shared.len() - 2;
+        if kept < 3 || kept == 3 && !self.leaves_a_tetrahedron_outward(b, a) {
             return false;
         }
         let pa = self.pos[a as usize];
@@ -557,6 +559,33 @@ impl Chunk {
             && new_tris
                 .iter()
                 .all(|t| self.deviation(d, t, allowance, true) <= allowance)
+    }
+
+    /// Whether collapsing `b` onto `a`, where `a` is left with three neighbours, leaves a
+    /// closed tetrahedron the right way out (or no tetrahedron at all): a blob smaller than
+    /// a cell can come down to four vertices nearly in one plane, and the last collapse
+    /// decides which way it faces (a ball under a cell wide came out inside out).
+    fn leaves_a_tetrahedron_outward(&self, b: u32, a: u32) -> bool {
+        let mut around: Vec<u32> = self.neighbours(a);
+        around.extend(self.neighbours(b));
+        around.sort_unstable();
+        around.dedup();
+        around.retain(|&v| v != a && v != b);
+        let &[x, y, z] = around.as_slice() else {
+            return true;
+        };
+        // The base: a live triangle on the three neighbours, in whichever order it runs.
+        let Some(base) = self
+            .fan(x)
+            .map(|t| self.tris[t as usize])
+            .find(|t| t.contains(&y) && t.contains(&z))
+        else {
+            return true;
+        };
+        let pa = self.pos[a as usize];
+        let [p, q, r] = base.map(|v| self.pos[v as usize] - pa);
+        // The base faces away from `a` on a tetrahedron the right way out.
+        p.dot(q.cross(r)) > 0.0
     }
 
     /// Whether the field is planar on each side of the crease through `a` next to `b`: its
