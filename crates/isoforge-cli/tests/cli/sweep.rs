@@ -126,8 +126,17 @@ fn mesh_writes_one_closed_mesh_per_step() {
         let check = isoforge(&["check", &file.display().to_string(), "--json"]);
         ok(&check);
         let checked: serde_json::Value = serde_json::from_slice(&check.stdout).unwrap();
-        assert_eq!(checked["volume"], step["volume"]);
-        volumes.push(step["volume"].as_f64().unwrap());
+        // The two sum the same triangles around different points (the region's centre, the
+        // vertices' box's centre), so they may part in the last bits, no more.
+        let (meshed, read) = (
+            step["volume"].as_f64().unwrap(),
+            checked["volume"].as_f64().unwrap(),
+        );
+        assert!(
+            (meshed - read).abs() <= 1e-12 * meshed.abs(),
+            "{meshed} vs {read}"
+        );
+        volumes.push(meshed);
     }
     assert!(!out.exists(), "the unnumbered file was written too");
     assert_eq!(volumes[0], volumes[2]);

@@ -167,6 +167,28 @@ fn sphere_volume_converges() {
     assert!(stl_io_valid(&m));
 }
 
+/// The same mesh gives the same volume and area to the last bit on one thread or many (a
+/// CI run once saw them part in the last digit, under a reduce that split as threads stole).
+#[test]
+fn the_sums_do_not_depend_on_the_threads() {
+    let m = uv_sphere(1.0, 300, 150);
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a thread pool");
+        pool.install(|| check(&m))
+    };
+    let one = on(1);
+    for threads in [2, 3, 8] {
+        for _ in 0..4 {
+            let many = on(threads);
+            assert_eq!(many.volume.to_bits(), one.volume.to_bits(), "{threads} threads");
+            assert_eq!(many.area.to_bits(), one.area.to_bits(), "{threads} threads");
+        }
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
 
