@@ -183,7 +183,11 @@ fn the_sums_do_not_depend_on_the_threads() {
     for threads in [2, 3, 8] {
         for _ in 0..4 {
             let many = on(threads);
-            assert_eq!(many.volume.to_bits(), one.volume.to_bits(), "{threads} threads");
+            assert_eq!(
+                many.volume.to_bits(),
+                one.volume.to_bits(),
+                "{threads} threads"
+            );
             assert_eq!(many.area.to_bits(), one.area.to_bits(), "{threads} threads");
         }
     }
