@@ -22,6 +22,11 @@
 //!   flat, and collapses onto a crease vertex are tried: smooth parts are already as coarse
 //!   as the octree merge allows.
 //!
+//! Where the field is made of planes, two more steps: before the collapses, vertices are
+//! put on the planes and edges that cut a crease are split at it (`planes.rs`); after each
+//! round, a vertex the collapses left may be removed and its hole filled by ear clipping
+//! in its planes (`removal.rs`), which covers holes no fan from a neighbour can.
+//!
 //! Memory stays bounded: up to [`CHUNK`] triangles are held and collapsed at the end; a
 //! larger mesh goes on unchanged once it outgrows that. (Collapsing chunk by chunk, open
 //! fans frozen at the seams, works, and the code for it stays; but on the gyroid sphere at
@@ -36,6 +41,9 @@ use glam::DVec3;
 
 use super::sampler::Sampler;
 use crate::sink::MeshSink;
+
+mod planes;
+mod removal;
 
 /// The most triangles collapsed: a few MiB of working structures. The turned cube at depth
 /// 9 (16,224 merged triangles) and the heart fit; at 2^18, spheres_chain at depth 9 (176,048)
@@ -172,6 +180,8 @@ pub struct Decimator<'a, S: Sampler> {
     ev: S::Evals,
     root: S::Local,
     tolerance: f64,
+    /// The finest cell's size.
+    cell: f64,
     inner: &'a mut dyn MeshSink,
     /// Input index of the chunk's first vertex.
     base: u32,
@@ -191,12 +201,13 @@ pub struct Decimator<'a, S: Sampler> {
 
 impl<'a, S: Sampler> Decimator<'a, S> {
     /// Collapses within `tolerance` (model units) on the way to `inner`.
-    pub fn new(sampler: &'a S, tolerance: f64, inner: &'a mut dyn MeshSink) -> Self {
+    pub fn new(sampler: &'a S, tolerance: f64, cell: f64, inner: &'a mut dyn MeshSink) -> Self {
         Decimator {
             sampler,
             ev: sampler.evals(),
             root: sampler.root(),
             tolerance,
+            cell,
             inner,
             base: 0,
             verts: Vec::new(),
@@ -283,6 +294,10 @@ struct Chunk {
     dev: Vec<f64>,
     /// Around this point the quadrics are summed (precision).
     origin: DVec3,
+    /// The field's plane at each vertex (`planes.rs`), once measured.
+    plane: Vec<Option<planes::Plane>>,
+    /// Vertices added on creases so far.
+    added: u32,
 }
 
 impl Chunk {
@@ -366,6 +381,8 @@ impl Chunk {
             around,
             tris,
             origin,
+            plane: Vec::new(),
+            added: 0,
         })
     }
 
@@ -422,6 +439,10 @@ impl Chunk {
                 }
             }
         };
+        self.measure_planes(d);
+        self.snap_onto_planes(d);
+        self.split_across_creases(d);
+        self.snap_onto_planes(d);
         for _ in 0..ROUNDS {
             let mut done = 0usize;
             for v in 0..self.pos.len() as u32 {
@@ -449,6 +470,13 @@ impl Chunk {
                 for w in self.neighbours(a) {
                     push(self, &mut heap, w, a);
                     push(self, &mut heap, a, w);
+                }
+            }
+            // Where collapses stop on planes, a vertex may still go with its hole filled
+            // otherwise (`removal.rs`); the collapses next to it are tried again after.
+            for v in 0..self.pos.len() as u32 {
+                if self.free[v as usize] && self.alive_v[v as usize] && self.try_remove(d, v) {
+                    done += 1;
                 }
             }
             if done == 0 {
@@ -661,6 +689,33 @@ impl Chunk {
         e
     }
 
+    /// A new vertex at `p` (on a crease, `planes.rs`), on `plane`, whose fan is to come
+    /// whole. Its input index counts down from the top, where no mesher's vertex is.
+    fn add_vertex(&mut self, p: DVec3, plane: Option<planes::Plane>) -> u32 {
+        let id = self.pos.len() as u32;
+        self.added += 1;
+        self.pos.push(p);
+        self.input.push(u32::MAX - self.added);
+        self.free.push(true);
+        self.crease.push(true);
+        self.alive_v.push(true);
+        self.quadric.push(Quadric::default());
+        self.around.push(Vec::new());
+        self.plane.push(plane);
+        id
+    }
+
+    /// A new live triangle.
+    fn add_triangle(&mut self, t: [u32; 3]) {
+        let id = self.tris.len() as u32;
+        self.tris.push(t);
+        self.alive_t.push(true);
+        self.dev.push(f64::NAN);
+        for v in t {
+            self.around[v as usize].push(id);
+        }
+    }
+
     fn apply(&mut self, b: u32, a: u32) {
         let fan: Vec<u32> = self.fan(b).collect();
         for t in fan {
@@ -706,7 +761,7 @@ impl Chunk {
                 if out[v] == u32::MAX {
                     out[v] = d.written;
                     d.written += 1;
-                    d.inner.vertex(d.verts[v])?;
+                    d.inner.vertex(self.position(d, v))?;
                 }
                 let (p, q) = (
                     self.input[tri[(k + 1) % 3] as usize],
@@ -766,10 +821,15 @@ impl Chunk {
         Ok(())
     }
 
+    /// Where vertex `v` is written: the mesher's own (or moved) vertices, frozen ones as
+    /// they were written, and vertices added on creases (`planes.rs`) where they were put.
     fn position<S: Sampler>(&self, d: &Decimator<'_, S>, v: usize) -> [f32; 3] {
         match d.verts.get(v) {
             Some(p) => *p,
-            None => d.frozen.get(&self.input[v]).map_or([0.0; 3], |f| f.pos),
+            None => match d.frozen.get(&self.input[v]) {
+                Some(f) => f.pos,
+                None => self.pos[v].as_vec3().to_array(),
+            },
         }
     }
 }

@@ -37,8 +37,10 @@
 //! Nor may a split turn a small closed blob inside out (blobs a cell or two wide, at
 //! tolerances of half a cell and more, did): a split that moves an edge's middle outward
 //! while taking volume away is passed over when it leaves the wedge of its two sides inside
-//! out ([`inverts_the_wedge`]), and a mesher's vertex left far off the surface takes no
-//! splits on its edges ([`STRAY_CELLS`]).
+//! out ([`inverts_the_wedge`]); a mesher's vertex left far off the surface takes no
+//! splits on its edges ([`STRAY_CELLS`]); and beside one the refiner could not move onto
+//! the surface at all, splits are held to a margin of their wedge and triangles get no
+//! centre vertex ([`folds_beside_stuck`]).
 //!
 //! Why the mesh stays closed and manifold: whether and where an edge splits is decided
 //! once, when the first triangle beside it asks, and the second reads the answer: a split's
@@ -196,6 +198,10 @@ struct Vert {
     /// A mesher's vertex left far off the surface (see [`STRAY_CELLS`]): edges to it are
     /// not split.
     stray: bool,
+    /// A mesher's vertex the refiner could not move onto the surface (it was more than the
+    /// tolerance's share [`MOVE_SHARE`] off): an edge to it splits only where that keeps its
+    /// wedge the right way out by a margin (see [`folds_beside_stuck`]).
+    stuck: bool,
 }
 
 impl Vert {
@@ -500,6 +506,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             normal: normal.as_vec3().to_array(),
             level,
             stray: false,
+            stuck: false,
         });
         Ok(id)
     }
@@ -623,6 +630,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         for &(_, (q, n)) in &candidates {
             if !self.folds_a_side(&sides, (q, n))
                 && !inverts_the_wedge(&sides, q, outward)
+                && !((va.stuck || vb.stuck) && folds_beside_stuck(&sides, q, outward))
                 && !self.crowded(q)
             {
                 chosen = Some((q, n));
@@ -804,7 +812,12 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             (p[0] - p[2]).length(),
         ];
         let shortest = lens.iter().copied().fold(f64::INFINITY, f64::min);
+        // Not beside a vertex left off the surface: its edges' splits are held to their
+        // wedges (`folds_beside_stuck`), and a centre has none to be held to (on a bitten
+        // ball under a cell wide, a centre put in the tetrahedron the collapses left turned
+        // it inside out).
         if lens.iter().copied().fold(0.0, f64::max) < SHORTEST * self.cell
+            || v.iter().any(|x| x.stuck)
             || !(0..3).any(|k| self.may_stray(&v[k], &v[(k + 1) % 3], lens[k]))
         {
             return Ok(None);
@@ -956,6 +969,38 @@ fn inverts_the_wedge(sides: &[[(DVec3, DVec3); 3]], q: DVec3, outward: f64) -> b
     change < 0.0 && wedge + change < 0.0
 }
 
+/// Whether a split beside a mesher's vertex the refiner could not move onto the surface
+/// folds its wedge (the tetrahedron of the edge and its sides' far corners): an outward
+/// move that takes away more than half of it, or an inward one that takes away more than
+/// all of a convex one. Blobs a cell wide at large tolerances turned inside out there
+/// (random CSG cases, session 25): the collapses left a tetrahedron with a corner stuck
+/// 0.29 of a cell inside a ball, and two outward splits at that corner, each within the
+/// whole-wedge rule of [`inverts_the_wedge`], together took more than the tetrahedron held;
+/// on a ball under a cell wide, bitten, a split of a split's edge moved inward and took
+/// 0.0016 from a wedge of 0.0003 (six times the volumes).
+fn folds_beside_stuck(sides: &[[(DVec3, DVec3); 3]], q: DVec3, outward: f64) -> bool {
+    let Some(&[(a, _), (b, _), (c, _)]) = sides.first() else {
+        return false;
+    };
+    let Some(d) = sides
+        .iter()
+        .find(|s| s[0].0 == b && s[1].0 == a)
+        .map(|s| s[2].0)
+    else {
+        return false;
+    };
+    let moved = q - (a + b) * 0.5;
+    let abc = (b - a).cross(c - a);
+    // Six times the volumes.
+    let change = moved.dot(abc) + moved.dot((a - b).cross(d - b));
+    let wedge = -(d - a).dot(abc);
+    if outward > 0.0 {
+        change < 0.0 && wedge + 2.0 * change < 0.0
+    } else {
+        wedge > 0.0 && wedge + change < 0.0
+    }
+}
+
 /// Where two tangent planes (a point and its unit normal) on either side of a crease meet,
 /// nearest to `mid`: the crease, to first order (as dual contouring's QEF finds it in a
 /// cell). `None` when the planes are too near parallel to say.
@@ -975,19 +1020,21 @@ fn crease_point((pa, na): (DVec3, DVec3), (pb, nb): (DVec3, DVec3), mid: DVec3) 
 impl<S: Sampler> MeshSink for Refiner<'_, S> {
     fn vertex(&mut self, p: [f32; 3]) -> io::Result<()> {
         let at = DVec3::from(p.map(f64::from));
-        let mut stray = false;
+        let (mut stray, mut stuck) = (false, false);
         let (pos, normal) = match self.probe(at) {
             Some((_, n, d)) if d > self.tolerance * MOVE_SHARE => {
                 let moved = self.onto_surface(at, REACH * self.cell);
-                stray = moved.is_none() && d > STRAY_CELLS * self.cell;
+                stuck = moved.is_none();
+                stray = stuck && d > STRAY_CELLS * self.cell;
                 moved.unwrap_or((at, n))
             }
             Some((_, n, _)) => (at, n),
             None => (at, DVec3::ZERO),
         };
         let id = self.emit_vertex(pos, normal, 0)?;
-        if stray && let Some(v) = self.verts.get_mut(id as usize) {
-            v.stray = true;
+        if let Some(v) = self.verts.get_mut(id as usize) {
+            v.stray = stray;
+            v.stuck = stuck;
         }
         self.remap.push(id);
         Ok(())

@@ -57,7 +57,7 @@ pub fn run<S: Sampler>(
         .effective_tolerance()
         .min(settings.cell() * decimate::MAX_CELLS);
     let mut refiner = Refiner::new(sampler, tolerance, &settings.bounds, settings.cell(), sink);
-    let mut decimator = Decimator::new(sampler, tolerance, &mut refiner);
+    let mut decimator = Decimator::new(sampler, tolerance, settings.cell(), &mut refiner);
     contour_into(sampler, settings, merging, block_shift, &mut decimator)?;
     decimator.finish().map_err(MeshError::Write)?;
     refiner.finish().map_err(MeshError::Write)
