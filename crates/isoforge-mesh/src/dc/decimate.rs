@@ -511,7 +511,7 @@ impl Chunk {
         // `a` keeps at least three neighbours, or a tetrahedron would fold flat; with three,
         // a closed tetrahedron must stay the right way out.
         let kept = na.len() + nb.len() - shared.len() - 2;
-        if kept < 3 || kept == 3 && !self.leaves_a_tetrahedron_outward(b, a) {
+        if kept < 3 || kept == 3 && !self.leaves_a_tetrahedron_outward(b, a, &na, &nb) {
             return false;
         }
         let pa = self.pos[a as usize];
@@ -592,10 +592,11 @@ impl Chunk {
     /// Whether collapsing `b` onto `a`, where `a` is left with three neighbours, leaves a
     /// closed tetrahedron the right way out (or no tetrahedron at all): a blob smaller than
     /// a cell can come down to four vertices nearly in one plane, and the last collapse
-    /// decides which way it faces (a ball under a cell wide came out inside out).
-    fn leaves_a_tetrahedron_outward(&self, b: u32, a: u32) -> bool {
-        let mut around: Vec<u32> = self.neighbours(a);
-        around.extend(self.neighbours(b));
+    /// decides which way it faces (a ball under a cell wide came out inside out). `na` and
+    /// `nb` are the neighbours of `a` and `b`.
+    fn leaves_a_tetrahedron_outward(&self, b: u32, a: u32, na: &[u32], nb: &[u32]) -> bool {
+        let mut around: Vec<u32> = na.to_vec();
+        around.extend(nb);
         around.sort_unstable();
         around.dedup();
         around.retain(|&v| v != a && v != b);
