@@ -939,16 +939,7 @@ fn both_planes_step(f1: f64, g1: DVec3, f2: f64, g2: DVec3) -> Option<DVec3> {
 /// adding volume to convex wedges along spheres_chain's grooves fail the mirrored test, and
 /// without those splits it missed the tolerance (2.0 tolerances).
 fn inverts_the_wedge(sides: &[[(DVec3, DVec3); 3]], q: DVec3, outward: f64) -> bool {
-    // The first side, and the first that runs along the edge the other way (a piece's
-    // edge may also have the corners of the triangles split beside it).
-    let Some(&[(a, _), (b, _), (c, _)]) = sides.first() else {
-        return false;
-    };
-    let Some(d) = sides
-        .iter()
-        .find(|s| s[0].0 == b && s[1].0 == a)
-        .map(|s| s[2].0)
-    else {
+    let Some([a, b, c, d]) = wedge_of(sides) else {
         return false;
     };
     let thin = |[u, v, w]: [DVec3; 3]| {
@@ -961,12 +952,26 @@ fn inverts_the_wedge(sides: &[[(DVec3, DVec3); 3]], q: DVec3, outward: f64) -> b
     if outward <= 0.0 || thin([a, b, c]) || thin([b, a, d]) {
         return false;
     }
+    let (change, wedge) = split_volumes([a, b, c, d], q);
+    change < 0.0 && wedge + change < 0.0
+}
+
+/// The edge `a b` and its two sides' far corners `c` and `d`: the first side, and the first
+/// that runs along the edge the other way (a piece's edge may also have the corners of the
+/// triangles split beside it). `None` until both sides are known.
+fn wedge_of(sides: &[[(DVec3, DVec3); 3]]) -> Option<[DVec3; 4]> {
+    let &[(a, _), (b, _), (c, _)] = sides.first()?;
+    let d = sides.iter().find(|s| s[0].0 == b && s[1].0 == a)?[2].0;
+    Some([a, b, c, d])
+}
+
+/// Six times the volume a split at `q` adds (the move of the edge's middle dotted with its
+/// sides' area vectors), and six times the volume of its wedge (the tetrahedron of the edge
+/// and the far corners, positive where the surface is convex across the edge).
+fn split_volumes([a, b, c, d]: [DVec3; 4], q: DVec3) -> (f64, f64) {
     let moved = q - (a + b) * 0.5;
     let (abc, bad) = ((b - a).cross(c - a), (a - b).cross(d - b));
-    // Six times the volumes.
-    let change = moved.dot(abc) + moved.dot(bad);
-    let wedge = -(d - a).dot(abc);
-    change < 0.0 && wedge + change < 0.0
+    (moved.dot(abc) + moved.dot(bad), -(d - a).dot(abc))
 }
 
 /// Whether a split beside a mesher's vertex the refiner could not move onto the surface
@@ -979,21 +984,10 @@ fn inverts_the_wedge(sides: &[[(DVec3, DVec3); 3]], q: DVec3, outward: f64) -> b
 /// on a ball under a cell wide, bitten, a split of a split's edge moved inward and took
 /// 0.0016 from a wedge of 0.0003 (six times the volumes).
 fn folds_beside_stuck(sides: &[[(DVec3, DVec3); 3]], q: DVec3, outward: f64) -> bool {
-    let Some(&[(a, _), (b, _), (c, _)]) = sides.first() else {
+    let Some(corners) = wedge_of(sides) else {
         return false;
     };
-    let Some(d) = sides
-        .iter()
-        .find(|s| s[0].0 == b && s[1].0 == a)
-        .map(|s| s[2].0)
-    else {
-        return false;
-    };
-    let moved = q - (a + b) * 0.5;
-    let abc = (b - a).cross(c - a);
-    // Six times the volumes.
-    let change = moved.dot(abc) + moved.dot((a - b).cross(d - b));
-    let wedge = -(d - a).dot(abc);
+    let (change, wedge) = split_volumes(corners, q);
     if outward > 0.0 {
         change < 0.0 && wedge + 2.0 * change < 0.0
     } else {
