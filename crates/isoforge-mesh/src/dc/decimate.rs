@@ -624,27 +624,12 @@ impl Chunk {
     /// are planes, and its splits then take the allowance back; on curved faces they did not
     /// (sphere_circle missed the tolerance by 1.8, stacked_sphere_circle by 3.6).
     fn planes_around<S: Sampler>(&self, d: &mut Decimator<'_, S>, b: u32, a: u32) -> bool {
-        let mut planes: Vec<DVec3> = Vec::with_capacity(2);
         let mut around = self.neighbours(b);
         around.extend(self.neighbours(a));
         around.sort_unstable();
         around.dedup();
-        for v in around {
-            let p = self.pos[v as usize];
-            let g = d.sampler.grad(&mut d.ev, &d.root, p.to_array());
-            let n = DVec3::new(g[1], g[2], g[3]).normalize_or_zero();
-            if n == DVec3::ZERO || !n.is_finite() {
-                return false;
-            }
-            if planes.iter().any(|m| m.distance(n) < PLANAR) {
-                continue;
-            }
-            if planes.len() == 2 {
-                return false;
-            }
-            planes.push(n);
-        }
-        true
+        let normals = around.into_iter().map(|v| self.normal_at(d, v));
+        planes::at_most_two(normals, |m, n| m.distance(*n) < PLANAR).is_some()
     }
 
     /// The largest distance from the surface, by the field, of a triangle's sample

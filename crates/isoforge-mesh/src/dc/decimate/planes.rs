@@ -81,18 +81,21 @@ impl Chunk {
     /// The planes at `b` and its ring, `b`'s first; `None` when they are more than two
     /// (or the field says nothing at one of them).
     pub(super) fn planes_of(&self, b: u32, ring: &[u32]) -> Option<Vec<Plane>> {
-        let mut planes: Vec<Plane> = Vec::with_capacity(2);
-        for &v in std::iter::once(&b).chain(ring) {
-            let p = self.plane[v as usize]?;
-            if planes.iter().any(|m| m.same(&p)) {
-                continue;
-            }
-            if planes.len() == 2 {
-                return None;
-            }
-            planes.push(p);
+        let planes = std::iter::once(b).chain(ring.iter().copied());
+        at_most_two(planes.map(|v| self.plane[v as usize]), Plane::same)
+    }
+
+    /// The field's unit gradient at vertex `v`: its plane's normal where measured, else
+    /// evaluated; `None` where the field says nothing.
+    pub(super) fn normal_at<S: Sampler>(&self, d: &mut Decimator<'_, S>, v: u32) -> Option<DVec3> {
+        if let Some(p) = self.plane.get(v as usize).copied().flatten() {
+            return Some(p.n);
         }
-        Some(planes)
+        let g = d
+            .sampler
+            .grad(&mut d.ev, &d.root, self.pos[v as usize].to_array());
+        let n = DVec3::new(g[1], g[2], g[3]).normalize_or_zero();
+        (n != DVec3::ZERO && n.is_finite()).then_some(n)
     }
 
     /// Moves each vertex that is off every plane around it onto them (module doc).
@@ -162,10 +165,8 @@ impl Chunk {
         if a.same(&b) || a.n.dot(b.n) > CREASE_SPLIT_COS {
             return false;
         }
-        if a.distance(px) > eps || b.distance(py) > eps || a.distance(py) <= eps {
-            return false;
-        }
-        if b.distance(px) <= eps {
+        let on = |plane: &Plane, p: DVec3| plane.distance(p) <= eps;
+        if !on(&a, px) || !on(&b, py) || on(&a, py) || on(&b, px) {
             return false;
         }
         // The crease point at the chord's place along the crease.
@@ -247,6 +248,26 @@ fn plane_at<S: Sampler>(d: &mut Decimator<'_, S>, p: DVec3) -> Option<Plane> {
         n,
         c: n.dot(p) - g[0] / grad.length(),
     })
+}
+
+/// The distinct ones among `items` (by `same`), first seen first; `None` as soon as one is
+/// missing or a third turns up.
+pub(super) fn at_most_two<T: Copy>(
+    items: impl IntoIterator<Item = Option<T>>,
+    same: impl Fn(&T, &T) -> bool,
+) -> Option<Vec<T>> {
+    let mut distinct: Vec<T> = Vec::with_capacity(2);
+    for item in items {
+        let item = item?;
+        if distinct.iter().any(|x| same(x, &item)) {
+            continue;
+        }
+        if distinct.len() == 2 {
+            return None;
+        }
+        distinct.push(item);
+    }
+    Some(distinct)
 }
 
 /// Whether `p` is within `within` of the surface, by the field's first-order distance.
