@@ -217,6 +217,52 @@ fn a_tolerance_is_held_or_the_share_of_the_area_beyond_it_is_reported() {
 }
 
 #[test]
+fn a_drilled_block_holds_its_tolerance_and_admesh_finds_nothing_to_fix() {
+    // cube_holes at the default depth: a chord of the merge's once crossed its 5 mm hole
+    // 0.22 mm inside the rim (26 tolerances), over a flap folded back under it.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cube_holes.stl");
+    let out_s = out.display().to_string();
+    let model = fixtures()
+        .join("slice/cube_holes.rhai")
+        .display()
+        .to_string();
+    let run = isoforge(&["mesh", &model, "-o", &out_s, "--json"]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let made: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+    let tolerance = made["tolerance"].as_f64().expect("tolerance").to_string();
+    let run = isoforge(&[
+        "check",
+        &out_s,
+        "--against",
+        &model,
+        "--tolerance",
+        &tolerance,
+        "--json",
+    ]);
+    let j: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+    assert_eq!(j["tolerance_held"], true, "{j}");
+    assert_eq!(run.status.code(), Some(0));
+    let figures = crate::sweeps::admesh_figures(&out);
+    assert_eq!(crate::sweeps::figure(&figures, "Number of parts"), 1.0);
+    for label in [
+        "Degenerate facets",
+        "Edges fixed",
+        "Facets removed",
+        "Facets added",
+        "Facets reversed",
+        "Backwards edges",
+        "Normals fixed",
+    ] {
+        assert_eq!(crate::sweeps::figure(&figures, label), 0.0, "{label}");
+    }
+}
+
+#[test]
 fn gcode_files_are_summed_up() {
     let dir = tempfile::tempdir().unwrap();
     let gcode = dir.path().join("pins.gcode");

@@ -33,7 +33,7 @@ fn every_sweep_fixture_meshes_closed_at_two_depths() {
 }
 
 /// admesh's report as (label, first number after the colon) pairs.
-fn admesh_figures(stl: &Path) -> Vec<(String, f64)> {
+pub fn admesh_figures(stl: &Path) -> Vec<(String, f64)> {
     let run = Command::new("admesh")
         .arg(stl)
         .output()
@@ -63,7 +63,7 @@ fn admesh_figures(stl: &Path) -> Vec<(String, f64)> {
     figures
 }
 
-fn figure(figures: &[(String, f64)], label: &str) -> f64 {
+pub fn figure(figures: &[(String, f64)], label: &str) -> f64 {
     figures
         .iter()
         .find(|(l, _)| l == label)

@@ -22,6 +22,10 @@
 //!   flat, and collapses onto a crease vertex are tried: smooth parts are already as coarse
 //!   as the octree merge allows.
 //!
+//! Before the collapses, flaps (two triangles folded back onto each other across an edge,
+//! as the merge leaves at some curved creases) are unfolded by flipping the edge
+//! (`flaps.rs`).
+//!
 //! Where the field is made of planes, two more steps: before the collapses, vertices are
 //! put on the planes and edges that cut a crease are split at it (`planes.rs`); after each
 //! round, a vertex the collapses left may be removed and its hole filled by ear clipping
@@ -42,6 +46,7 @@ use glam::DVec3;
 use super::sampler::Sampler;
 use crate::sink::MeshSink;
 
+mod flaps;
 mod planes;
 mod removal;
 
@@ -439,6 +444,7 @@ impl Chunk {
                 }
             }
         };
+        self.unfold_flaps(d);
         self.measure_planes(d);
         self.snap_onto_planes(d);
         self.split_across_creases(d);

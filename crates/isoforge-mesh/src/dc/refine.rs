@@ -20,7 +20,8 @@
 //! the middle landed with either end's), whichever leaves the straighter halves and is
 //! neither near an end nor within [`APART`] cells of another new vertex; a triangle whose
 //! edges all hold but whose centre does not gets a vertex there, unless a piece would face
-//! against the field at its corners (a fold). Splitting goes on in the
+//! against the field at its corners (a fold); its pieces get no centre again unless all
+//! their sides are long ([`LONG_CELLS`]). Splitting goes on in the
 //! pieces (longest split edge first, as in Rivara's bisection), at most [`MAX_SPLITS`]
 //! levels and down to edges of [`SHORTEST`] of a cell.
 //!
@@ -53,8 +54,9 @@
 //!
 //! What it costs: one gradient per vertex, and one per edge whose ends' normals say a chord
 //! there could be off by a quarter of the tolerance (a circular arc of chord `l` whose
-//! normals turn by `θ` is `l/2 · tan(θ/4)` from it): along creases, and along the long
-//! chords of merged leaves on curved parts. At depth 8 that took spheres_chain from 0.20 to
+//! normals turn by `θ` is `l/2 · tan(θ/4)` from it) or that is longer than [`LONG_CELLS`]
+//! (two crease vertices may read the same face's normal): along creases, and along the long
+//! chords of merged leaves. At depth 8 that took spheres_chain from 0.20 to
 //! 0.39 s and gyroid_sphere from 0.60 to 0.95 s (a stricter filter saved little and let
 //! curve_cyl's chords miss by 3.7 tolerances instead of 2.8).
 
@@ -78,6 +80,16 @@ const SPLIT_SHARE: f64 = 0.8;
 /// The normals' arc estimate must reach this share of the tolerance before an edge is
 /// looked at by the field.
 const FILTER_SHARE: f64 = 0.25;
+
+/// Edges longer than this many finest cells are looked at by the field whatever their
+/// ends' normals say, and triangles whose sides are all longer may take a centre vertex
+/// again in a centre split's pieces. At a crease a vertex's normal is one face's, so two
+/// vertices on a curved crease can read the same normal: on cube_holes (a slicing
+/// fixture) at depth 8, a chord of the merge's crossed its 5 mm hole 0.22 mm inside the rim
+/// (26 tolerances) and was never looked at. And on pins, strips of the cylinders from cap
+/// to cap (64 cells long) kept their centres' pieces 1.07 tolerances off. Such edges are
+/// few: the merge makes them only on flat and nearly flat parts.
+const LONG_CELLS: f64 = 2.0;
 
 /// A vertex farther than this share of the tolerance from the surface is moved onto it.
 const MOVE_SHARE: f64 = 0.5;
@@ -528,10 +540,11 @@ impl<'a, S: Sampler> Refiner<'a, S> {
     }
 
     /// Whether the chord between two vertices can be off by the tolerance, by their
-    /// normals (the module doc); true where a normal is unknown.
+    /// normals (the module doc); true where a normal is unknown or the chord is long
+    /// ([`LONG_CELLS`]).
     fn may_stray(&self, a: &Vert, b: &Vert, len: f64) -> bool {
         let (na, nb) = (a.normal(), b.normal());
-        if na == DVec3::ZERO || nb == DVec3::ZERO {
+        if na == DVec3::ZERO || nb == DVec3::ZERO || len > LONG_CELLS * self.cell {
             return true;
         }
         let theta = na.dot(nb).clamp(-1.0, 1.0).acos();
@@ -801,6 +814,12 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         }
     }
 
+    /// Whether every side of triangle `t` is longer than [`LONG_CELLS`] cells.
+    fn long_sided(&self, t: [u32; 3]) -> bool {
+        let p = t.map(|i| self.verts[i as usize].at());
+        (0..3).all(|k| (p[k] - p[(k + 1) % 3]).length() > LONG_CELLS * self.cell)
+    }
+
     /// A vertex at the centre of triangle `t`, on the surface, if the centre strays and
     /// no edge of it was split.
     fn centre(&mut self, t: [u32; 3]) -> io::Result<Option<u32>> {
@@ -894,7 +913,9 @@ impl<'a, S: Sampler> Refiner<'a, S> {
                 self.tessellate([a, m, c], level + 1, centred)?;
                 return self.tessellate([m, b, c], level + 1, centred);
             }
-            if !centred && let Some(m) = self.centre(t)? {
+            if (!centred || self.long_sided(t))
+                && let Some(m) = self.centre(t)?
+            {
                 for k in 0..3 {
                     // Between pieces (t[k-1], t[k], m) and (t[k], t[k+1], m).
                     let (prev, next) = (t[(k + 2) % 3], t[(k + 1) % 3]);
@@ -1216,6 +1237,45 @@ mod tests {
         let (uniform, out) = refined(&ball, bounds, 6, 0.1 * 2.6 / 64.0);
         assert_eq!(uniform.triangles, out.triangles);
         assert_eq!(uniform.vertices, out.vertices);
+    }
+
+    /// cube_holes (fixtures/slice): a 20 mm block with vertical holes 3, 5 and 6 mm across.
+    fn block_with_holes() -> (Shape, Bounds) {
+        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+        let block = (x.abs() - 10.0)
+            .max(&(y.abs() - 10.0))
+            .max(&((&z - 10.0).abs() - 10.0));
+        let hole =
+            |cx: f64, cy: f64, r: f64| -(((&x - cx).square() + (&y - cy).square()).sqrt() - r);
+        let shape = block
+            .max(&hole(-5.0, -5.0, 1.5))
+            .max(&hole(5.0, -5.0, 2.5))
+            .max(&hole(0.0, 5.0, 3.0));
+        (
+            shape,
+            Bounds::new([-11.0, -11.0, -1.0], [11.0, 11.0, 21.0]).unwrap(),
+        )
+    }
+
+    #[test]
+    fn the_tolerance_holds_at_a_hole_s_rim() {
+        // The merge leaves long chords on the block's flat bottom, some between two
+        // vertices on a hole's rim, with a flap folded back under them. Both vertices'
+        // normals are the bottom's, so by the normals alone the chord could not stray; it
+        // crossed the 5 mm hole 0.22 mm inside its rim: 6.4, 12.8 and 26 tolerances at
+        // depths 6, 7 and 8 before `LONG_CELLS` and the flaps' flips (`decimate/flaps.rs`).
+        let (shape, bounds) = block_with_holes();
+        for depth in [6, 7, 8] {
+            let settings = MeshSettings::new(bounds, depth);
+            let mesh = mesh_shape(&shape, &settings);
+            let d = deviation(&mesh, &ClippedField::new(&shape, bounds));
+            let tolerance = settings.effective_tolerance();
+            assert!(
+                d.max <= tolerance,
+                "depth {depth}: {d:?}, tolerance {tolerance}"
+            );
+            assert!(check(&mesh).is_closed_manifold(), "depth {depth}");
+        }
     }
 
     #[test]
