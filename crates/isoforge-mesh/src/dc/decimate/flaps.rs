@@ -5,16 +5,16 @@
 //! vertices into a flap: on cube_holes (fixtures/slice) at depth 6, a bottom triangle of
 //! the merge's reached across the rim of a 5 mm hole to a chord 0.22 mm inside it, and
 //! three triangles between the rim's vertices lay folded back under it, facing up. The mesh
-//! is closed and its volume right (a flap has none), but the chord is 6.4 tolerances off,
-//! and the refiner's splits of a folded pair leave pieces folded too (3.2 tolerances at
-//! depth 7).
+//! is closed (a flat flap holds no volume), but the chord is 6.4 tolerances off, and the
+//! refiner's splits of a folded pair leave pieces folded too (3.2 tolerances at depth 7).
 //!
-//! The pair `a b c`, `b a d` becomes `a d c`, `d b c` (the same quadrilateral, the other
+//! The pair `a b c`, `b a e` becomes `a e c`, `e b c` (the same quadrilateral, the other
 //! diagonal) when that turns the fold into two triangles facing the same way: the new
-//! pair's normals agree, both face out by the field, and neither is farther from the
-//! surface than the old pair was. Vertices do not move, so nothing else changes; the link
-//! condition holds when `c d` is not an edge already and `a` and `b` keep three
-//! neighbours.
+//! pair's normals agree, both face out by the field, neither is farther from the surface
+//! than the old pair was, and the pair lies flat (the tetrahedron between the two
+//! diagonals holds at most a tolerance's depth over it). Vertices do not move, so nothing
+//! else changes; the link condition holds when `c e` is not an edge already and `a` and
+//! `b` keep three neighbours.
 
 use glam::DVec3;
 
@@ -33,23 +33,21 @@ const AGREE_COS: f64 = 0.9;
 const PASSES: usize = 4;
 
 impl Chunk {
-    /// Flips the edges of flaps; how many were flipped.
-    pub(super) fn unfold_flaps<S: Sampler>(&mut self, d: &mut Decimator<'_, S>) -> usize {
-        let mut flipped = 0;
+    /// Flips the edges of flaps, pass after pass while a pass flips one.
+    pub(super) fn unfold_flaps<S: Sampler>(&mut self, d: &mut Decimator<'_, S>) {
         for _ in 0..PASSES {
-            let before = flipped;
+            let mut flipped = false;
             for t in 0..self.tris.len() as u32 {
                 for k in 0..3 {
                     if self.alive_t[t as usize] && self.try_flip(d, t, k) {
-                        flipped += 1;
+                        flipped = true;
                     }
                 }
             }
-            if flipped == before {
+            if !flipped {
                 break;
             }
         }
-        flipped
     }
 
     /// Flips the edge of triangle `t` from its corner `k` to the next, if it is a flap's.
@@ -85,6 +83,14 @@ impl Chunk {
         let new = [[a, e, c], [e, b, c]];
         let (m0, m1) = (normal(new[0]), normal(new[1]));
         if m0 == DVec3::ZERO || m1 == DVec3::ZERO || m0.dot(m1) < AGREE_COS {
+            return false;
+        }
+        // A flap lies flat: the tetrahedron between the two diagonals holds no more than a
+        // tolerance's depth over the pair (a thin wedge's two faces are no flap).
+        let [pa, pb, pc, pe] = [a, b, c, e].map(|v| self.pos[v as usize]);
+        let six_volume = (pb - pa).cross(pc - pa).dot(pe - pa).abs();
+        let twice_area = (pe - pa).cross(pc - pa).length() + (pb - pe).cross(pc - pe).length();
+        if six_volume / 6.0 > d.tolerance * twice_area / 2.0 {
             return false;
         }
         if self.neighbours(c).binary_search(&e).is_ok()
