@@ -33,7 +33,7 @@ fn every_sweep_fixture_meshes_closed_at_two_depths() {
 }
 
 /// admesh's report as (label, first number after the colon) pairs.
-pub fn admesh_figures(stl: &Path) -> Vec<(String, f64)> {
+fn admesh_figures(stl: &Path) -> Vec<(String, f64)> {
     let run = Command::new("admesh")
         .arg(stl)
         .output()
@@ -63,7 +63,26 @@ pub fn admesh_figures(stl: &Path) -> Vec<(String, f64)> {
     figures
 }
 
-pub fn figure(figures: &[(String, f64)], label: &str) -> f64 {
+/// admesh's figures for `stl`, after checking it is one part with nothing to fix.
+pub fn admesh_finds_nothing_to_fix(stl: &Path, name: &str) -> Vec<(String, f64)> {
+    let figures = admesh_figures(stl);
+    assert_eq!(figure(&figures, "Number of parts"), 1.0, "{name}");
+    for label in [
+        "Total disconnected facets",
+        "Degenerate facets",
+        "Edges fixed",
+        "Facets removed",
+        "Facets added",
+        "Facets reversed",
+        "Backwards edges",
+        "Normals fixed",
+    ] {
+        assert_eq!(figure(&figures, label), 0.0, "{name}: {label}");
+    }
+    figures
+}
+
+fn figure(figures: &[(String, f64)], label: &str) -> f64 {
     figures
         .iter()
         .find(|(l, _)| l == label)
@@ -77,21 +96,8 @@ fn admesh_finds_nothing_to_fix_in_sweep_meshes() {
     for model in models("sweeps") {
         let out = dir.path().join("out.stl");
         let json = mesh_ok(&model, &out, &["--depth", "6"]);
-        let figures = admesh_figures(&out);
         let name = model.display();
-        assert_eq!(figure(&figures, "Number of parts"), 1.0, "{name}");
-        for label in [
-            "Total disconnected facets",
-            "Degenerate facets",
-            "Edges fixed",
-            "Facets removed",
-            "Facets added",
-            "Facets reversed",
-            "Backwards edges",
-            "Normals fixed",
-        ] {
-            assert_eq!(figure(&figures, label), 0.0, "{name}: {label}");
-        }
+        let figures = admesh_finds_nothing_to_fix(&out, &name.to_string());
         // admesh sums in single precision; ours in double.
         let ours = json["volume"].as_f64().unwrap_or(0.0);
         let theirs = figure(&figures, "Volume");

@@ -1265,26 +1265,22 @@ mod tests {
         // crossed the 5 mm hole 0.22 mm inside its rim: 6.4, 12.8 and 26 tolerances at
         // depths 6, 7 and 8 before `LONG_CELLS` and the flaps' flips (`decimate/flaps.rs`).
         let (shape, bounds) = block_with_holes();
-        for depth in [6, 7, 8] {
-            let settings = MeshSettings::new(bounds, depth);
-            let mesh = mesh_shape(&shape, &settings);
-            let d = deviation(&mesh, &ClippedField::new(&shape, bounds));
-            let tolerance = settings.effective_tolerance();
-            assert!(
-                d.max <= tolerance,
-                "depth {depth}: {d:?}, tolerance {tolerance}"
-            );
-            assert!(check(&mesh).is_closed_manifold(), "depth {depth}");
-        }
+        holds_the_tolerance(&shape, bounds, &[6, 7, 8]);
     }
 
     #[test]
     fn the_mesher_holds_the_tolerance_at_a_groove() {
         let (shape, bounds) = two_spheres();
-        for depth in [6, 7] {
+        holds_the_tolerance(&shape, bounds, &[6, 7]);
+    }
+
+    /// The whole mesher at each depth, at its default tolerance: within it by the field,
+    /// closed and manifold.
+    fn holds_the_tolerance(shape: &Shape, bounds: Bounds, depths: &[u8]) {
+        for &depth in depths {
             let settings = MeshSettings::new(bounds, depth);
-            let mesh = mesh_shape(&shape, &settings);
-            let d = deviation(&mesh, &ClippedField::new(&shape, bounds));
+            let mesh = mesh_shape(shape, &settings);
+            let d = deviation(&mesh, &ClippedField::new(shape, bounds));
             let tolerance = settings.effective_tolerance();
             assert!(
                 d.max <= tolerance,
