@@ -54,11 +54,14 @@ impl Chunk {
     fn try_flip<S: Sampler>(&mut self, d: &mut Decimator<'_, S>, t: u32, k: usize) -> bool {
         let tri = self.tris[t as usize];
         let (a, b, c) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
-        let across: Vec<u32> = self
-            .fan(a)
-            .filter(|&u| u != t && self.tris[u as usize].contains(&b))
-            .collect();
-        let &[u] = across.as_slice() else {
+        // The one other triangle on edge a-b (two or more: not a manifold edge, left alone).
+        let one = {
+            let mut across = self
+                .fan(a)
+                .filter(|&u| u != t && self.tris[u as usize].contains(&b));
+            (across.next(), across.next())
+        };
+        let (Some(u), None) = one else {
             return false;
         };
         let other = self.tris[u as usize];
