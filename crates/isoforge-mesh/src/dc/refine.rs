@@ -98,12 +98,25 @@ const MOVE_SHARE: f64 = 0.5;
 /// surface it would land on may be another part's (a thin sheet's far side). When the
 /// refiner was new, 0.75 turned a one-cell blob of a random CSG test inside out, and 0.25
 /// was chosen; since then the guards beside stuck and stray vertices and against
-/// inverted wedges came, and at 0.75 both random CSG tests pass (30,000 cases each). At
-/// depth 8, 0.25 left boat_hull's bow and threaded_rod's tooth tips with vertices up to
-/// 0.3 cells off (3.0 and 3.2 tolerances; now 0.82 and 0.86, held), sinus_bugs 6.4 and
-/// drilled_import 5.4 tolerances off (now 4.2 and 2.4). At 1.0 spaceship went from 5.3 to
-/// 6.4 tolerances (vertices near [`STRAY_CELLS`] moved rather than left unsplit).
+/// inverted wedges came, and with [`FAR_MOVE`] and [`THICK_CELLS`] 0.75 holds. At depth
+/// 8, 0.25 left threaded_rod's tooth tips with vertices up to 0.3 cells off (3.2
+/// tolerances; now 0.86, held), sinus_bugs 6.4 and drilled_import 5.4 tolerances off (now
+/// 4.2 and 3.8). At 1.0 spaceship went from 5.3 to 6.4 tolerances (vertices near
+/// [`STRAY_CELLS`] moved rather than left unsplit).
 const REACH: f64 = 0.75;
+
+/// A vertex moved farther than this many finest cells is held like one that could not be
+/// moved ([`folds_beside_stuck`]; no centre beside it), and moves so far only where the
+/// surface is thick ([`THICK_CELLS`]). Moves up to a quarter of a cell were free before,
+/// and still are.
+const FAR_MOVE: f64 = 0.25;
+
+/// A vertex moves farther than [`FAR_MOVE`] only where the surface has this many finest
+/// cells of the other side beyond where it lands, and of its own side behind where it
+/// starts (each checked halfway and at the end). Without it, balls 0.86 and 1.03 cells
+/// wide (seeds of the random CSG test, at the default tolerance and at half a cell) came
+/// out inside out; checked beyond alone, the second still did (its vertex started inside).
+const THICK_CELLS: f64 = 1.0;
 
 /// A mesher's vertex farther from the surface than this many finest cells (by the field's
 /// first-order distance) that could not be moved onto it within [`REACH`] takes no splits
@@ -217,8 +230,9 @@ struct Vert {
     /// not split.
     stray: bool,
     /// A mesher's vertex the refiner could not move onto the surface (it was more than the
-    /// tolerance's share [`MOVE_SHARE`] off): an edge to it splits only where that keeps its
-    /// wedge the right way out by a margin (see [`folds_beside_stuck`]).
+    /// tolerance's share [`MOVE_SHARE`] off), or moved farther than [`FAR_MOVE`]: an edge to
+    /// it splits only where that keeps its wedge the right way out by a margin (see
+    /// [`folds_beside_stuck`]).
     stuck: bool,
 }
 
@@ -511,6 +525,23 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         }
         let (_, n, d) = self.probe(q)?;
         (d <= self.tolerance * 0.1).then_some((q, n))
+    }
+
+    /// Whether the sides of the surface on either end of a move from `p` to `q` go on for
+    /// [`THICK_CELLS`]: beyond `q`, and behind `p`. A vertex moved far onto a ball or a
+    /// wall thinner than that, or out of one, may land on its far side.
+    fn thick_beyond(&mut self, p: DVec3, q: DVec3) -> bool {
+        let dir = (q - p).normalize_or_zero();
+        let Some((fp, _, _)) = self.probe(p) else {
+            return false;
+        };
+        [0.5, 1.0].iter().all(|&k| {
+            let step = dir * (k * THICK_CELLS * self.cell);
+            let beyond = self.probe(q + step);
+            let behind = self.probe(p - step);
+            beyond.is_some_and(|(f, _, _)| f.signum() != fp.signum())
+                && behind.is_some_and(|(f, _, _)| f.signum() == fp.signum())
+        })
     }
 
     /// A new output vertex.
@@ -1044,9 +1075,11 @@ impl<S: Sampler> MeshSink for Refiner<'_, S> {
         let (mut stray, mut stuck) = (false, false);
         let (pos, normal) = match self.probe(at) {
             Some((_, n, d)) if d > self.tolerance * MOVE_SHARE => {
-                let moved = self.onto_surface(at, REACH * self.cell);
-                stuck = moved.is_none();
-                stray = stuck && d > STRAY_CELLS * self.cell;
+                let moved = self.onto_surface(at, REACH * self.cell).filter(|&(q, _)| {
+                    (q - at).length() <= FAR_MOVE * self.cell || self.thick_beyond(at, q)
+                });
+                stray = moved.is_none() && d > STRAY_CELLS * self.cell;
+                stuck = moved.is_none_or(|(q, _)| (q - at).length() > FAR_MOVE * self.cell);
                 moved.unwrap_or((at, n))
             }
             Some((_, n, _)) => (at, n),
