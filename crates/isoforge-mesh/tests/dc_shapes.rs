@@ -304,55 +304,58 @@ fn balls_narrower_than_a_cell_face_out() {
 /// while the field said outwards. The mesh came out inside out (volume −0.019).
 #[test]
 fn a_coarse_ball_at_a_large_tolerance_stays_outward() {
-    let shape = sphere_at([0.75, -0.75, 0.75], 0.499_826_891_906_626_1);
-    let bounds = Bounds::new(
-        [
-            -1.162_743_629_197_630_7,
-            -0.812_897_799_187_762,
-            -0.972_050_036_836_623_2,
-        ],
-        [1.273_942_035_870_429_6, 0.8, 0.802_969_235_793_597_9],
-    )
-    .expect("a box");
-    let mut settings = MeshSettings::new(bounds, 3);
-    settings.tolerance = Some(3.0 * settings.cell());
-    mesh_ok_with(&shape, &settings, "coarse ball");
+    let lo = [
+        -1.162_743_629_197_630_7,
+        -0.812_897_799_187_762,
+        -0.972_050_036_836_623_2,
+    ];
+    let hi = [1.273_942_035_870_429_6, 0.8, 0.802_969_235_793_597_9];
+    let ball = ([0.75, -0.75, 0.75], 0.499_826_891_906_626_1);
+    ball_stays_outward(ball, (lo, hi), 3, Some(3.0), "coarse ball");
 }
 
 /// A ball under a cell wide at the default tolerance (a seed of the random CSG test, found
 /// when the refiner first moved vertices from up to three quarters of a cell).
 #[test]
 fn a_ball_under_a_cell_wide_stays_outward_at_the_default_tolerance() {
-    let shape = sphere_at([0.0, -0.5, 0.0], 0.067_278_203_183_806_17);
-    let bounds = Bounds::new(
-        [
-            -1.293_247_648_319_000_3,
-            -1.097_354_947_634_789_5,
-            -1.072_554_283_793_918_8,
-        ],
-        [1.202_246_890_950_576, 0.8, 0.8],
-    )
-    .expect("a box");
-    mesh_ok_with(&shape, &MeshSettings::new(bounds, 4), "ball under a cell");
+    let lo = [
+        -1.293_247_648_319_000_3,
+        -1.097_354_947_634_789_5,
+        -1.072_554_283_793_918_8,
+    ];
+    let hi = [1.202_246_890_950_576, 0.8, 0.8];
+    let ball = ([0.0, -0.5, 0.0], 0.067_278_203_183_806_17);
+    ball_stays_outward(ball, (lo, hi), 4, None, "ball under a cell");
 }
 
 /// A ball about a cell wide at half a cell's tolerance (another seed of that hunt): a
 /// vertex inside it moved out onto it, half a cell.
 #[test]
 fn a_ball_a_cell_wide_stays_outward_when_its_vertices_move_far() {
-    let shape = sphere_at([0.75, 0.25, -0.75], 0.144_200_719_260_978_77);
-    let bounds = Bounds::new(
-        [
-            -1.171_095_160_909_201_3,
-            -0.987_277_511_518_992_8,
-            -1.000_591_733_724_876_2,
-        ],
-        [0.913_915_436_889_291, 1.259_739_278_879_834_3, 0.8],
-    )
-    .expect("a box");
-    let mut settings = MeshSettings::new(bounds, 3);
-    settings.tolerance = Some(0.5 * settings.cell());
-    mesh_ok_with(&shape, &settings, "ball a cell wide");
+    let lo = [
+        -1.171_095_160_909_201_3,
+        -0.987_277_511_518_992_8,
+        -1.000_591_733_724_876_2,
+    ];
+    let hi = [0.913_915_436_889_291, 1.259_739_278_879_834_3, 0.8];
+    let ball = ([0.75, 0.25, -0.75], 0.144_200_719_260_978_77);
+    ball_stays_outward(ball, (lo, hi), 3, Some(0.5), "ball a cell wide");
+}
+
+/// Meshes a ball (centre, radius) in the region (lo, hi) at `depth`, with a tolerance of
+/// `tolerance_cells` finest cells (`None`: the default), and checks the mesh is closed,
+/// manifold and the right way out ([`mesh_ok_with`]).
+fn ball_stays_outward(
+    (centre, radius): ([f64; 3], f64),
+    (lo, hi): ([f64; 3], [f64; 3]),
+    depth: u8,
+    tolerance_cells: Option<f64>,
+    what: &str,
+) {
+    let bounds = Bounds::new(lo, hi).expect("a box");
+    let mut settings = MeshSettings::new(bounds, depth);
+    settings.tolerance = tolerance_cells.map(|cells| cells * settings.cell());
+    mesh_ok_with(&sphere_at(centre, radius), &settings, what);
 }
 
 fn value_at(s: &Shape, p: [f64; 3]) -> f64 {

@@ -530,11 +530,9 @@ impl<'a, S: Sampler> Refiner<'a, S> {
     /// Whether the sides of the surface on either end of a move from `p` to `q` go on for
     /// [`THICK_CELLS`]: beyond `q`, and behind `p`. A vertex moved far onto a ball or a
     /// wall thinner than that, or out of one, may land on its far side.
-    fn thick_beyond(&mut self, p: DVec3, q: DVec3) -> bool {
+    /// `fp` is the field at `p`, already probed by the caller.
+    fn thick_around(&mut self, p: DVec3, fp: f64, q: DVec3) -> bool {
         let dir = (q - p).normalize_or_zero();
-        let Some((fp, _, _)) = self.probe(p) else {
-            return false;
-        };
         [0.5, 1.0].iter().all(|&k| {
             let step = dir * (k * THICK_CELLS * self.cell);
             let beyond = self.probe(q + step);
@@ -1074,12 +1072,14 @@ impl<S: Sampler> MeshSink for Refiner<'_, S> {
         let at = DVec3::from(p.map(f64::from));
         let (mut stray, mut stuck) = (false, false);
         let (pos, normal) = match self.probe(at) {
-            Some((_, n, d)) if d > self.tolerance * MOVE_SHARE => {
+            Some((f, n, d)) if d > self.tolerance * MOVE_SHARE => {
+                let mut far = false;
                 let moved = self.onto_surface(at, REACH * self.cell).filter(|&(q, _)| {
-                    (q - at).length() <= FAR_MOVE * self.cell || self.thick_beyond(at, q)
+                    far = (q - at).length() > FAR_MOVE * self.cell;
+                    !far || self.thick_around(at, f, q)
                 });
                 stray = moved.is_none() && d > STRAY_CELLS * self.cell;
-                stuck = moved.is_none_or(|(q, _)| (q - at).length() > FAR_MOVE * self.cell);
+                stuck = moved.is_none() || far;
                 moved.unwrap_or((at, n))
             }
             Some((_, n, _)) => (at, n),
