@@ -11,6 +11,11 @@
 //! It also counts the triangles that face against the field's gradient at their centroid:
 //! folds, which neither the distance nor a check of the mesh alone reveals.
 //!
+//! Given a width ([`deviation_where_wide`]), the points beyond a tolerance are told apart
+//! by how wide the model is where they miss (`narrow.rs`): a lattice of cells cannot follow
+//! a solid or a gap narrower than two of its cells, so a mesh's promise holds where the
+//! model is wider than that.
+//!
 //! ```
 //! use isoforge_field::{Bounds, ClippedField, Shape};
 //! use isoforge_mesh::{deviation, mesh_shape, MeshSettings};
@@ -27,6 +32,8 @@ use isoforge_field::{BatchEval, ClippedField, GradEval};
 use rayon::prelude::*;
 
 use crate::mesh::Mesh;
+
+mod narrow;
 
 /// Points per batch: large enough for the batch evaluator to pay off.
 const CHUNK: usize = 4096;
@@ -64,12 +71,29 @@ pub struct Deviation {
     pub facing_against: usize,
     /// Their share of the mesh's area, 0 to 1.
     pub area_facing_against: f64,
+    /// With a width ([`deviation_where_wide`]): the points beyond the tolerance where the
+    /// model (the solid, or the gap outside it) is narrower than the width, measured
+    /// through the point along the way to the surface nearest it.
+    pub points_beyond_narrow: usize,
+    /// Their share of the mesh's area, 0 to 1 (a part of `area_beyond`).
+    pub area_beyond_narrow: f64,
+    /// The largest distance of a point not counted narrow: the largest distance where
+    /// the model is at least the width wide (with no width asked for, `max`).
+    pub max_wide: f64,
+    /// Where that is.
+    pub max_wide_at: [f64; 3],
 }
 
 impl Deviation {
     /// Whether the mesh keeps within `tolerance` of the surface everywhere sampled.
     pub fn holds(&self, tolerance: f64) -> bool {
         self.max <= tolerance
+    }
+
+    /// Whether it keeps within `tolerance` wherever the model is at least the width asked
+    /// of [`deviation_where_wide`] wide.
+    pub fn holds_where_wide(&self, tolerance: f64) -> bool {
+        self.max_wide <= tolerance
     }
 }
 
@@ -83,6 +107,18 @@ pub fn deviation(mesh: &Mesh, field: &ClippedField) -> Deviation {
 /// searched around, so those it counts are truly over (up to a limit of points searched;
 /// `beyond_exact` says whether it was reached).
 pub fn deviation_beyond(mesh: &Mesh, field: &ClippedField, tolerance: f64) -> Deviation {
+    deviation_where_wide(mesh, field, tolerance, 0.0)
+}
+
+/// As [`deviation_beyond`], and of the points beyond `tolerance`, those where the model is
+/// narrower than `width` counted apart (`points_beyond_narrow`, `area_beyond_narrow`,
+/// `max_wide`; `narrow.rs` says how the width is measured). A width of 0 counts none.
+pub fn deviation_where_wide(
+    mesh: &Mesh,
+    field: &ClippedField,
+    tolerance: f64,
+    width: f64,
+) -> Deviation {
     if !mesh.has_valid_indices() || mesh.triangles.is_empty() {
         return Deviation {
             beyond_exact: true,
@@ -107,11 +143,12 @@ pub fn deviation_beyond(mesh: &Mesh, field: &ClippedField, tolerance: f64) -> De
             .map(|p| p.to_array())
         })
         .collect();
-    let mut found: Vec<(f64, bool)> = points
+    let mut found: Vec<Found> = points
         .par_chunks(CHUNK)
         .flat_map_iter(|chunk| distances(field, chunk))
         .collect();
     let beyond_exact = refine_largest(field, &points, &mut found, tolerance);
+    let narrow = narrow::beyond_and_narrow(field, &points, &found, tolerance, width);
     // Degree-3 rule on a triangle: corners 3/60, edge middles 8/60, centroid 27/60.
     const WEIGHTS: [f64; 7] = [
         3.0 / 60.0,
@@ -127,22 +164,30 @@ pub fn deviation_beyond(mesh: &Mesh, field: &ClippedField, tolerance: f64) -> De
         beyond_exact,
         ..Deviation::default()
     };
-    let (mut weighted, mut area, mut beyond) = (0.0, 0.0, 0.0);
+    let (mut weighted, mut area, mut beyond, mut beyond_narrow) = (0.0, 0.0, 0.0, 0.0);
     for (ti, &t) in mesh.triangles.iter().enumerate() {
         let [a, b, c] = mesh.corners(t);
         let twice = (b - a).cross(c - a).length();
         let mut sum = 0.0;
-        for k in 0..7 {
-            let (d, estimated) = found[7 * ti + k];
+        for (k, &weight) in WEIGHTS.iter().enumerate() {
+            let i = 7 * ti + k;
+            let Found { d, estimated, .. } = found[i];
             out.estimated += usize::from(estimated);
-            sum += WEIGHTS[k] * d;
+            sum += weight * d;
             if d > tolerance {
                 out.points_beyond += 1;
-                beyond += WEIGHTS[k] * twice;
+                beyond += weight * twice;
             }
             if d > out.max {
                 out.max = d;
-                out.at = points[7 * ti + k];
+                out.at = points[i];
+            }
+            if narrow[i] {
+                out.points_beyond_narrow += 1;
+                beyond_narrow += weight * twice;
+            } else if d > out.max_wide {
+                out.max_wide = d;
+                out.max_wide_at = points[i];
             }
         }
         weighted += sum * twice;
@@ -150,6 +195,11 @@ pub fn deviation_beyond(mesh: &Mesh, field: &ClippedField, tolerance: f64) -> De
     }
     out.mean = if area > 0.0 { weighted / area } else { 0.0 };
     out.area_beyond = if area > 0.0 { beyond / area } else { 0.0 };
+    out.area_beyond_narrow = if area > 0.0 {
+        beyond_narrow / area
+    } else {
+        0.0
+    };
     let against: Vec<f64> = mesh
         .triangles
         .par_iter()
@@ -174,6 +224,17 @@ pub fn deviation_beyond(mesh: &Mesh, field: &ClippedField, tolerance: f64) -> De
     out
 }
 
+/// A sample point's distance to the surface.
+#[derive(Clone, Copy, Debug, Default)]
+struct Found {
+    /// The distance.
+    d: f64,
+    /// Whether it is the first-order estimate (no sign change found nearby).
+    estimated: bool,
+    /// The unit direction in which the surface was found that near (zero if none).
+    toward: DVec3,
+}
+
 /// Directions searched around the points with the largest distances.
 const DIRECTIONS: usize = 96;
 /// Steps along each direction, out to the distance known so far.
@@ -194,7 +255,7 @@ const REFINE_LIMIT: usize = 50_000;
 fn refine_largest(
     field: &ClippedField,
     points: &[[f64; 3]],
-    found: &mut [(f64, bool)],
+    found: &mut [Found],
     floor: f64,
 ) -> bool {
     use std::cmp::Ordering;
@@ -225,8 +286,8 @@ fn refine_largest(
     let mut heap: BinaryHeap<Item> = found
         .iter()
         .enumerate()
-        .filter(|(_, d)| d.0 > 0.0 && d.0.is_finite())
-        .map(|(i, d)| Item(d.0, i, false))
+        .filter(|(_, f)| f.d > 0.0 && f.d.is_finite())
+        .map(|(i, f)| Item(f.d, i, false))
         .collect();
     let mut batch = BatchEval::new();
     let (mut xs, mut ys, mut zs, mut f) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -288,22 +349,28 @@ fn refine_largest(
                 }
             }
         }
-        let nearer = brackets.iter().map(|b| b.2).fold(d, f64::min);
-        found[i] = (nearer, found[i].1 && nearer >= d);
-        heap.push(Item(nearer, i, true));
+        let nearest = brackets.iter().min_by(|a, b| a.2.total_cmp(&b.2));
+        if let Some(&(u, _, hi)) = nearest.filter(|b| b.2 < d) {
+            found[i] = Found {
+                d: hi,
+                estimated: false,
+                toward: u,
+            };
+        }
+        heap.push(Item(found[i].d, i, true));
     }
     true
 }
 
 /// The distance to the surface of each point, and whether it is the first-order estimate.
-fn distances(field: &ClippedField, points: &[[f64; 3]]) -> Vec<(f64, bool)> {
+fn distances(field: &ClippedField, points: &[[f64; 3]]) -> Vec<Found> {
     let mut grad = GradEval::new();
     let mut batch = BatchEval::new();
     let n = points.len();
     // Per point: the direction towards the surface and the first-order distance.
     let mut dir = vec![DVec3::ZERO; n];
     let mut first = vec![0.0; n];
-    let mut out = vec![(0.0, false); n];
+    let mut out = vec![Found::default(); n];
     let mut sign0 = vec![false; n];
     let mut todo: Vec<usize> = Vec::with_capacity(n);
     for (i, p) in points.iter().enumerate() {
@@ -315,14 +382,15 @@ fn distances(field: &ClippedField, points: &[[f64; 3]]) -> Vec<(f64, bool)> {
         }
         if !g.v.is_finite() || slope.is_nan() || slope <= 0.0 || !slope.is_finite() {
             // No direction to search in: report what can be said.
-            out[i] = (
-                if g.v.is_finite() {
+            out[i] = Found {
+                d: if g.v.is_finite() {
                     g.v.abs()
                 } else {
                     f64::INFINITY
                 },
-                true,
-            );
+                estimated: true,
+                toward: DVec3::ZERO,
+            };
             continue;
         }
         first[i] = g.v.abs() / slope;
@@ -369,7 +437,11 @@ fn distances(field: &ClippedField, points: &[[f64; 3]]) -> Vec<(f64, bool)> {
         open = still;
     }
     for &i in &open {
-        out[i] = (first[i], true);
+        out[i] = Found {
+            d: first[i],
+            estimated: true,
+            toward: dir[i],
+        };
     }
     let bracketed: Vec<usize> = todo.into_iter().filter(|&i| hi[i].is_finite()).collect();
     for _ in 0..BISECTIONS {
@@ -388,7 +460,11 @@ fn distances(field: &ClippedField, points: &[[f64; 3]]) -> Vec<(f64, bool)> {
         }
     }
     for &i in &bracketed {
-        out[i] = (0.5 * (lo[i] + hi[i]), false);
+        out[i] = Found {
+            d: 0.5 * (lo[i] + hi[i]),
+            estimated: false,
+            toward: dir[i],
+        };
     }
     out
 }

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Args;
 use isoforge_field::ClippedField;
-use isoforge_mesh::{Deviation, MeshReport, check, deviation_beyond, read_mesh};
+use isoforge_mesh::{Deviation, MAX_DEPTH, MeshReport, check, deviation_where_wide, read_mesh};
 use serde_json::json;
 
 use crate::common::{Global, ModelArgs, print_json};
@@ -44,7 +44,17 @@ pub struct CheckArgs {
     /// area does not, and the exit status is 1 if it does not.
     #[arg(long, value_name = "MM", requires = "against", value_parser = parse_tolerance)]
     pub tolerance: Option<f64>,
+    /// With --tolerance: the depth the mesh was made at (as `mesh --depth` takes it, or as
+    /// `mesh` reports it). Points beyond the tolerance where the model is narrower than
+    /// two of that depth's cells (a solid or a gap no lattice of them can follow) are
+    /// counted apart, and the report says whether the tolerance holds everywhere else.
+    #[arg(long, value_name = "N", requires = "tolerance")]
+    pub depth: Option<u8>,
 }
+
+/// Finest cells across which a solid or a gap counts as narrow (`--depth`): a feature
+/// must span two lattice samples to be seen whole.
+const NARROW_CELLS: f64 = 2.0;
 
 /// A tolerance: a finite number, 0 or more.
 fn parse_tolerance(s: &str) -> Result<f64, String> {
@@ -74,6 +84,13 @@ pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
     };
     // The model is loaded before the mesh is judged, so a bad model is an error, not a
     // report without its figures.
+    if let Some(d) = args.depth
+        && d > MAX_DEPTH
+    {
+        return Err(crate::common::usage(format!(
+            "--depth {d}: at most {MAX_DEPTH}"
+        )));
+    }
     let field = match &args.against {
         Some(model) => {
             let loaded = ModelArgs {
@@ -84,15 +101,23 @@ pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
                 script_memory: isoforge_script::DEFAULT_MAX_MEMORY_BYTES >> 20,
             }
             .load()?;
-            Some(ClippedField::new(&loaded.model.shape, loaded.bounds))
+            Some((
+                ClippedField::new(&loaded.model.shape, loaded.bounds),
+                loaded.bounds.longest_side(),
+            ))
         }
         None => None,
+    };
+    // The width under which the model counts as narrow: two cells of the mesh's depth.
+    let narrow = match (&field, args.depth) {
+        (Some((_, longest)), Some(d)) => NARROW_CELLS * longest / f64::from(1u32 << d),
+        _ => 0.0,
     };
     let report = check(&mesh);
     let tolerance = args.tolerance;
     let dev = field
         .as_ref()
-        .map(|f| deviation_beyond(&mesh, f, tolerance.unwrap_or(f64::INFINITY)));
+        .map(|(f, _)| deviation_where_wide(&mesh, f, tolerance.unwrap_or(f64::INFINITY), narrow));
     let held = match (dev, tolerance) {
         (Some(d), Some(t)) => d.holds(t),
         _ => true,
@@ -112,6 +137,23 @@ pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
                 obj.insert("tolerance_held".into(), json!(held));
                 obj.insert("area_beyond_tolerance".into(), json!(d.area_beyond));
                 obj.insert("points_beyond_tolerance".into(), json!(d.points_beyond));
+                if narrow > 0.0 {
+                    obj.insert("narrow_width".into(), json!(narrow));
+                    obj.insert(
+                        "tolerance_held_where_wide".into(),
+                        json!(d.holds_where_wide(t)),
+                    );
+                    obj.insert("max_deviation_where_wide".into(), json!(d.max_wide));
+                    obj.insert("max_deviation_where_wide_at".into(), json!(d.max_wide_at));
+                    obj.insert(
+                        "area_beyond_where_narrow".into(),
+                        json!(d.area_beyond_narrow),
+                    );
+                    obj.insert(
+                        "points_beyond_where_narrow".into(),
+                        json!(d.points_beyond_narrow),
+                    );
+                }
             }
         }
         print_json(&j);
@@ -121,6 +163,9 @@ pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
             print!("{}", deviation_text(&d));
             if let Some(t) = tolerance {
                 print!("{}", tolerance_text(&d, t));
+                if narrow > 0.0 && !d.holds(t) {
+                    print!("{}", narrow_text(&d, t, narrow));
+                }
             }
         }
     }
@@ -241,6 +286,25 @@ fn tolerance_text(d: &Deviation, t: f64) -> String {
         )
     };
     format!("  {:<24}{t:.6} mm: {verdict}\n", "tolerance")
+}
+
+/// The rows that split what is beyond the tolerance by the model's width there.
+fn narrow_text(d: &Deviation, t: f64, narrow: f64) -> String {
+    let wide = if d.holds_where_wide(t) {
+        "held".to_string()
+    } else {
+        format!(
+            "NOT held: {:.6} mm at [{}, {}, {}]",
+            d.max_wide, d.max_wide_at[0] as f32, d.max_wide_at[1] as f32, d.max_wide_at[2] as f32
+        )
+    };
+    format!(
+        "  {:<24}{wide}\n  {:<24}{:.4} % of the area ({} points) beyond, where narrower\n",
+        format!("where ≥ {narrow:.4} mm wide"),
+        "",
+        100.0 * d.area_beyond_narrow,
+        d.points_beyond_narrow,
+    )
 }
 
 fn yes_no(b: bool) -> String {

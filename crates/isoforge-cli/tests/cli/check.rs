@@ -219,6 +219,72 @@ fn a_tolerance_is_held_or_the_share_of_the_area_beyond_it_is_reported() {
 }
 
 #[test]
+fn with_a_depth_misses_where_the_model_is_narrower_than_two_cells_are_counted_apart() {
+    // A sheet 0.1 thick, and a closed box 0.01 thick lying in it, 0.035 to 0.045 off
+    // both of the sheet's faces: beyond a tolerance of 0.01 everywhere.
+    let dir = tempfile::tempdir().unwrap();
+    let sheet = dir.path().join("sheet.rhai");
+    std::fs::write(&sheet, "bounds([-1, -1, -1], [1, 1, 1]);\nabs(z) - 0.05\n").unwrap();
+    let sheet = sheet.display().to_string();
+    let boxed = dir.path().join("box.obj");
+    let mut obj = String::new();
+    for i in 0..8 {
+        let c = |bit: usize, lo: f64, hi: f64| if i & bit == 0 { lo } else { hi };
+        let v = [c(1, -0.5, 0.5), c(2, -0.5, 0.5), c(4, 0.005, 0.015)];
+        obj += &format!("v {} {} {}\n", v[0], v[1], v[2]);
+    }
+    // Faces of the unit cube's corners 1..8 (bit 1: x, bit 2: y, bit 4: z), outward.
+    for f in [
+        "1 3 4 2", "5 6 8 7", "1 2 6 5", "3 7 8 4", "1 5 7 3", "2 4 8 6",
+    ] {
+        obj += &format!("f {f}\n");
+    }
+    std::fs::write(&boxed, obj).unwrap();
+    let boxed = boxed.display().to_string();
+    let check = |extra: &[&str]| {
+        let mut args = vec!["check", &boxed, "--against", &sheet, "--tolerance", "0.01"];
+        args.extend_from_slice(extra);
+        isoforge(&args)
+    };
+    let json = |extra: &[&str]| {
+        let run = check(&[extra, &["--json"]].concat());
+        // Beyond the tolerance, so exit 1 whatever the depth says.
+        assert_eq!(run.status.code(), Some(1));
+        let j: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+        assert_eq!(
+            (&j["closed_manifold"], &j["tolerance_held"]),
+            (&true.into(), &false.into()),
+            "{j}"
+        );
+        j
+    };
+    // Depth 5: cells of 2/32, so two are 0.125, wider than the sheet: every point beyond
+    // is where the model is narrow, and the tolerance holds everywhere else.
+    let j = json(&["--depth", "5"]);
+    assert_eq!(j["narrow_width"], 0.125, "{j}");
+    assert_eq!(
+        j["points_beyond_where_narrow"], j["points_beyond_tolerance"],
+        "{j}"
+    );
+    assert_eq!(j["tolerance_held_where_wide"], true, "{j}");
+    assert_eq!(j["max_deviation_where_wide"], 0.0, "{j}");
+    // Depth 8: two cells are 0.0156, and the sheet is wide: the misses are the mesh's.
+    let j = json(&["--depth", "8"]);
+    assert_eq!(j["points_beyond_where_narrow"], 0, "{j}");
+    assert_eq!(j["tolerance_held_where_wide"], false, "{j}");
+    assert_eq!(j["max_deviation_where_wide"], j["max_deviation"], "{j}");
+    // Without a depth, no split.
+    assert!(json(&[]).get("tolerance_held_where_wide").is_none());
+    // The readable report has the split too.
+    let text = String::from_utf8_lossy(&check(&["--depth", "5"]).stdout).to_string();
+    assert!(text.contains("where ≥ 0.1250 mm wide  held"), "{text}");
+    // A depth needs a tolerance, and a depth the mesher has.
+    let run = isoforge(&["check", &boxed, "--against", &sheet, "--depth", "5"]);
+    assert_eq!(run.status.code(), Some(2));
+    assert_eq!(check(&["--depth", "40"]).status.code(), Some(2));
+}
+
+#[test]
 fn a_drilled_block_holds_its_tolerance_and_admesh_finds_nothing_to_fix() {
     // cube_holes at the default depth: a chord of the merge's once crossed its 5 mm hole
     // 0.22 mm inside the rim (26 tolerances), over a flap folded back under it.
