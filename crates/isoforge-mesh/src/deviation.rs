@@ -72,8 +72,8 @@ pub struct Deviation {
     /// Their share of the mesh's area, 0 to 1.
     pub area_facing_against: f64,
     /// With a width ([`deviation_where_wide`]): the points beyond the tolerance where the
-    /// model (the solid, or the gap outside it) is narrower than the width, measured
-    /// through the point along the way to the surface nearest it.
+    /// model (the solid, or the gap outside it) is narrower than the width (`narrow.rs`
+    /// says how that is measured).
     pub points_beyond_narrow: usize,
     /// Their share of the mesh's area, 0 to 1 (a part of `area_beyond`).
     pub area_beyond_narrow: f64,
@@ -182,7 +182,7 @@ pub fn deviation_where_wide(
                 out.max = d;
                 out.at = points[i];
             }
-            if narrow[i] {
+            if narrow.get(i) == Some(&true) {
                 out.points_beyond_narrow += 1;
                 beyond_narrow += weight * twice;
             } else if d > out.max_wide {
@@ -233,6 +233,35 @@ struct Found {
     estimated: bool,
     /// The unit direction in which the surface was found that near (zero if none).
     toward: DVec3,
+}
+
+/// Points evaluated together, coordinate by coordinate, the buffers kept between calls.
+#[derive(Default)]
+struct Batch {
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    zs: Vec<f64>,
+    values: Vec<f64>,
+    eval: Option<BatchEval>,
+}
+
+impl Batch {
+    /// The field at each of `points`, in order.
+    fn eval(&mut self, field: &ClippedField, points: impl IntoIterator<Item = DVec3>) -> &[f64] {
+        self.xs.clear();
+        self.ys.clear();
+        self.zs.clear();
+        for q in points {
+            self.xs.push(q.x);
+            self.ys.push(q.y);
+            self.zs.push(q.z);
+        }
+        self.values.clear();
+        self.values.resize(self.xs.len(), 0.0);
+        let eval = self.eval.get_or_insert_with(BatchEval::new);
+        field.batch(eval, &self.xs, &self.ys, &self.zs, &mut self.values);
+        &self.values
+    }
 }
 
 /// Directions searched around the points with the largest distances.
@@ -289,8 +318,7 @@ fn refine_largest(
         .filter(|(_, f)| f.d > 0.0 && f.d.is_finite())
         .map(|(i, f)| Item(f.d, i, false))
         .collect();
-    let mut batch = BatchEval::new();
-    let (mut xs, mut ys, mut zs, mut f) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut batch = Batch::default();
     let mut searched = 0;
     while let Some(Item(d, i, done)) = heap.pop() {
         if done {
@@ -304,27 +332,11 @@ fn refine_largest(
         }
         searched += 1;
         let p = DVec3::from(points[i]);
-        let mut v = [0.0];
-        field.batch(&mut batch, &[p.x], &[p.y], &[p.z], &mut v);
-        let inside = v[0] < 0.0;
-        let mut sample = |qs: &mut dyn Iterator<Item = DVec3>, f: &mut Vec<f64>| {
-            xs.clear();
-            ys.clear();
-            zs.clear();
-            for q in qs {
-                xs.push(q.x);
-                ys.push(q.y);
-                zs.push(q.z);
-            }
-            f.clear();
-            f.resize(xs.len(), 0.0);
-            field.batch(&mut batch, &xs, &ys, &zs, f);
-        };
-        sample(
-            &mut dirs
-                .iter()
+        let inside = batch.eval(field, [p])[0] < 0.0;
+        let f = batch.eval(
+            field,
+            dirs.iter()
                 .flat_map(|&u| (1..=STEPS).map(move |k| p + u * (d * k as f64 / STEPS as f64))),
-            &mut f,
         );
         // Per direction, the first step past a sign change: a bracket to bisect.
         let mut brackets: Vec<(DVec3, f64, f64)> = Vec::new();
@@ -335,11 +347,10 @@ fn refine_largest(
             }
         }
         for _ in 0..BISECTIONS / 2 {
-            let mids: Vec<DVec3> = brackets
+            let mids = brackets
                 .iter()
-                .map(|&(u, lo, hi)| p + u * (0.5 * (lo + hi)))
-                .collect();
-            sample(&mut mids.into_iter(), &mut f);
+                .map(|&(u, lo, hi)| p + u * (0.5 * (lo + hi)));
+            let f = batch.eval(field, mids);
             for (b, &v) in brackets.iter_mut().zip(f.iter()) {
                 let mid = 0.5 * (b.1 + b.2);
                 if (v < 0.0) != inside {
@@ -365,7 +376,7 @@ fn refine_largest(
 /// The distance to the surface of each point, and whether it is the first-order estimate.
 fn distances(field: &ClippedField, points: &[[f64; 3]]) -> Vec<Found> {
     let mut grad = GradEval::new();
-    let mut batch = BatchEval::new();
+    let mut batch = Batch::default();
     let n = points.len();
     // Per point: the direction towards the surface and the first-order distance.
     let mut dir = vec![DVec3::ZERO; n];
@@ -398,21 +409,6 @@ fn distances(field: &ClippedField, points: &[[f64; 3]]) -> Vec<Found> {
         todo.push(i);
     }
     // Bracket: the first search step where F changes sign.
-    let (mut xs, mut ys, mut zs, mut f) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let mut eval = |idx: &[usize], at: &dyn Fn(usize) -> DVec3, f: &mut Vec<f64>| {
-        xs.clear();
-        ys.clear();
-        zs.clear();
-        for &i in idx {
-            let q = at(i);
-            xs.push(q.x);
-            ys.push(q.y);
-            zs.push(q.z);
-        }
-        f.clear();
-        f.resize(idx.len(), 0.0);
-        field.batch(&mut batch, &xs, &ys, &zs, f);
-    };
     let mut lo = vec![0.0; n];
     let mut hi = vec![f64::NAN; n];
     let mut open = todo.clone();
@@ -420,10 +416,10 @@ fn distances(field: &ClippedField, points: &[[f64; 3]]) -> Vec<Found> {
         if open.is_empty() {
             break;
         }
-        eval(
-            &open,
-            &|i| DVec3::from(points[i]) + dir[i] * (first[i] * k),
-            &mut f,
+        let f = batch.eval(
+            field,
+            open.iter()
+                .map(|&i| DVec3::from(points[i]) + dir[i] * (first[i] * k)),
         );
         let mut still = Vec::new();
         for (j, &i) in open.iter().enumerate() {
@@ -445,10 +441,11 @@ fn distances(field: &ClippedField, points: &[[f64; 3]]) -> Vec<Found> {
     }
     let bracketed: Vec<usize> = todo.into_iter().filter(|&i| hi[i].is_finite()).collect();
     for _ in 0..BISECTIONS {
-        eval(
-            &bracketed,
-            &|i| DVec3::from(points[i]) + dir[i] * (0.5 * (lo[i] + hi[i])),
-            &mut f,
+        let f = batch.eval(
+            field,
+            bracketed
+                .iter()
+                .map(|&i| DVec3::from(points[i]) + dir[i] * (0.5 * (lo[i] + hi[i]))),
         );
         for (j, &i) in bracketed.iter().enumerate() {
             let mid = 0.5 * (lo[i] + hi[i]);

@@ -82,8 +82,6 @@ pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
             return Err(crate::common::usage(e.to_string()));
         }
     };
-    // The model is loaded before the mesh is judged, so a bad model is an error, not a
-    // report without its figures.
     if let Some(d) = args.depth
         && d > MAX_DEPTH
     {
@@ -91,6 +89,8 @@ pub fn run(args: CheckArgs, global: &Global) -> Result<ExitCode> {
             "--depth {d}: at most {MAX_DEPTH}"
         )));
     }
+    // The model is loaded before the mesh is judged, so a bad model is an error, not a
+    // report without its figures.
     let field = match &args.against {
         Some(model) => {
             let loaded = ModelArgs {

@@ -19,9 +19,9 @@
 //! Only points beyond the tolerance are measured, in batches.
 
 use glam::DVec3;
-use isoforge_field::{BatchEval, ClippedField, GradEval};
+use isoforge_field::{ClippedField, GradEval};
 
-use super::Found;
+use super::{Batch, Found};
 
 /// Samples along each line, spread over the width: a solid or gap thinner than one step
 /// may be stepped over, and is then counted wide (the verdict errs towards "our fault").
@@ -31,7 +31,7 @@ const STEPS: usize = 32;
 const BEHIND: [usize; 3] = [1, 2, 4];
 
 /// Per sample point: whether it is beyond `tolerance` and the model is narrower than
-/// `width` there (see the module doc). All false when `width` is 0.
+/// `width` there (see the module doc). Empty when `width` is 0 (none is).
 pub(super) fn beyond_and_narrow(
     field: &ClippedField,
     points: &[[f64; 3]],
@@ -39,10 +39,10 @@ pub(super) fn beyond_and_narrow(
     tolerance: f64,
     width: f64,
 ) -> Vec<bool> {
-    let mut narrow = vec![false; points.len()];
     if width <= 0.0 {
-        return narrow;
+        return Vec::new();
     }
+    let mut narrow = vec![false; points.len()];
     let measured: Vec<usize> = (0..points.len())
         .filter(|&i| {
             let f = found[i];
@@ -50,7 +50,7 @@ pub(super) fn beyond_and_narrow(
         })
         .collect();
     let step = width / STEPS as f64;
-    let mut lines = Lines::default();
+    let (mut lines, mut batch) = (Vec::new(), Batch::default());
     let mut grad = GradEval::new();
     // A thousand points at a time: bounded memory, and batches the evaluator likes.
     for chunk in measured.chunks(1024) {
@@ -60,16 +60,16 @@ pub(super) fn beyond_and_narrow(
             let s = p + f.toward * f.d;
             // The point itself (its side of the surface), then the line back through it.
             lines.push(p);
-            lines.push_line(s, -f.toward, step);
+            push_line(&mut lines, s, -f.toward, step);
             for m in BEHIND {
                 let q = s + f.toward * (step * m as f64);
                 let g = DVec3::from(field.grad(&mut grad, q.to_array()).d).normalize_or_zero();
                 lines.push(q);
-                lines.push_line(q, g, step);
-                lines.push_line(q, -g, step);
+                push_line(&mut lines, q, g, step);
+                push_line(&mut lines, q, -g, step);
             }
         }
-        let values = lines.eval(field);
+        let values = batch.eval(field, lines.iter().copied());
         let per_point = 1 + STEPS + BEHIND.len() * (1 + 2 * STEPS);
         for (j, &i) in chunk.iter().enumerate() {
             let v = &values[j * per_point..(j + 1) * per_point];
@@ -97,41 +97,9 @@ pub(super) fn beyond_and_narrow(
     narrow
 }
 
-/// Points to evaluate in one batch, coordinate by coordinate.
-#[derive(Default)]
-struct Lines {
-    xs: Vec<f64>,
-    ys: Vec<f64>,
-    zs: Vec<f64>,
-    batch: Option<BatchEval>,
-}
-
-impl Lines {
-    fn clear(&mut self) {
-        self.xs.clear();
-        self.ys.clear();
-        self.zs.clear();
-    }
-
-    fn push(&mut self, q: DVec3) {
-        self.xs.push(q.x);
-        self.ys.push(q.y);
-        self.zs.push(q.z);
-    }
-
-    /// [`STEPS`] points from `from` along `dir`, `step` apart (the first a step away).
-    fn push_line(&mut self, from: DVec3, dir: DVec3, step: f64) {
-        for k in 1..=STEPS {
-            self.push(from + dir * (step * k as f64));
-        }
-    }
-
-    fn eval(&mut self, field: &ClippedField) -> Vec<f64> {
-        let mut values = vec![0.0; self.xs.len()];
-        let batch = self.batch.get_or_insert_with(BatchEval::new);
-        field.batch(batch, &self.xs, &self.ys, &self.zs, &mut values);
-        values
-    }
+/// [`STEPS`] points from `from` along `dir`, `step` apart (the first a step away).
+fn push_line(line: &mut Vec<DVec3>, from: DVec3, dir: DVec3, step: f64) {
+    line.extend((1..=STEPS).map(|k| from + dir * (step * k as f64)));
 }
 
 #[cfg(test)]
