@@ -31,11 +31,14 @@
 //! round, a vertex the collapses left may be removed and its hole filled by ear clipping
 //! in its planes (`removal.rs`), which covers holes no fan from a neighbour can.
 //!
-//! Memory stays bounded: up to [`CHUNK`] triangles are held and collapsed at the end; a
-//! larger mesh goes on unchanged once it outgrows that. (Collapsing chunk by chunk, open
-//! fans frozen at the seams, works, and the code for it stays; but on the gyroid sphere at
-//! depth 9 it cost a third more time and 14 MiB more for 15 % fewer triangles, and large
-//! meshes are smooth ones, already as coarse as the merge allows.)
+//! Memory stays bounded: triangles are collapsed [`CHUNK`] at a time, the vertices of fans
+//! still open at a chunk's end frozen (written, not moved) until the next chunk closes them.
+//! A full chunk is collapsed only where collapsing pays ([`PAYS_PER_VERTEX`]); after one
+//! that would not, the rest goes on unchanged. Smooth meshes are already as coarse as the
+//! merge allows: on the gyroid sphere at depth 9, collapsing every chunk cost a third more
+//! time and 14 MiB more for 15 % fewer triangles. Faceted ones are not: an imported STL
+//! (drilled_import) at depth 9 came out at 162,362 triangles when only meshes of one chunk
+//! were collapsed, 19,580 chunk by chunk.
 
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};
@@ -49,11 +52,21 @@ use crate::sink::MeshSink;
 mod flaps;
 mod planes;
 mod removal;
+#[cfg(test)]
+mod tests;
 
 /// The most triangles collapsed: a few MiB of working structures. The turned cube at depth
 /// 9 (16,224 merged triangles) and the heart fit; at 2^18, spheres_chain at depth 9 (176,048)
 /// took 3.3 times as long and 26 MiB more to lose 7 % of its triangles.
 pub const CHUNK: usize = 1 << 16;
+
+/// A full chunk is collapsed when it has at least this many collapses to try (edges of
+/// crease and flat vertices) per vertex whose fan is complete. Measured: knurled_knob's
+/// first chunk at depth 8 3.30 (collapsing kept 11 % of its triangles), drilled_import's
+/// (an imported STL's facets) at depth 9 3.18; smooth first chunks at depth 8: spheres_chain
+/// 0.68, sinus_sphere 0.70, tetrahedron_hull 0.90, gyroid_sphere 1.13, which kept 77 to
+/// 83 % for 0.3 to 1.1 s a chunk (docs/meshing.md, session 29).
+const PAYS_PER_VERTEX: f64 = 2.0;
 
 /// The collapses (and the refiner's splits) keep within this many finest cells of the
 /// surface whatever the tolerance: a triangle's sample points say little about a surface
@@ -211,8 +224,18 @@ pub struct Decimator<'a, S: Sampler> {
     written: u32,
     /// Input vertices so far.
     seen: u32,
-    /// Set once the mesh outgrew a chunk: everything goes straight on.
-    through: bool,
+    /// Set once a full chunk would not pay: everything after it goes straight on.
+    through: Option<Through>,
+    /// At most this many triangles per chunk ([`CHUNK`]; smaller in tests).
+    chunk: usize,
+}
+
+/// Where passing straight on began: input vertices from `base` on are written as they come,
+/// numbered from `out`; earlier ones are frozen vertices of the last chunk.
+#[derive(Clone, Copy)]
+struct Through {
+    base: u32,
+    out: u32,
 }
 
 impl<'a, S: Sampler> Decimator<'a, S> {
@@ -231,45 +254,65 @@ impl<'a, S: Sampler> Decimator<'a, S> {
             frozen: HashMap::new(),
             written: 0,
             seen: 0,
-            through: false,
+            through: None,
+            chunk: CHUNK,
         }
+    }
+
+    /// The same with chunks of at most `chunk` triangles (tests run the seams on small
+    /// meshes).
+    #[cfg(test)]
+    pub fn with_chunk(mut self, chunk: usize) -> Self {
+        self.chunk = chunk.max(1);
+        self
     }
 
     /// Collapses and writes what is held; call once the mesher is done.
     pub fn finish(&mut self) -> io::Result<()> {
-        if self.through {
+        if self.through.is_some() {
             return Ok(());
         }
-        self.flush()
+        self.flush(false)
     }
 
-    /// Gives up on a mesh too large for one chunk: what is held goes on unchanged (the
-    /// indices stay those the mesher gave), and so does everything after it.
-    fn pass_through(&mut self) -> io::Result<()> {
-        self.through = true;
-        for &p in &self.verts {
-            self.inner.vertex(p)?;
+    /// One round: collapse, write, keep the open fans' vertices frozen. A `full` chunk
+    /// (more may come) is collapsed only where that pays; if not, it is written as it came
+    /// and so is everything after it. The last chunk, or a mesh of one, always is.
+    fn flush(&mut self, full: bool) -> io::Result<()> {
+        let mut chunk = Chunk::new(self)?;
+        let pays = !full || chunk.pays(self.tolerance);
+        if pays {
+            chunk.collapse(self);
         }
-        for &t in &self.tris {
-            let corners = t.map(|v| self.verts.get(v as usize).copied().unwrap_or([0.0; 3]));
-            self.inner.triangle(t, corners)?;
+        chunk.write(self)?;
+        if !pays {
+            // All held vertices were written or frozen by `write`; from here on they go
+            // straight on, numbered after the written ones.
+            self.through = Some(Through {
+                base: self.seen,
+                out: self.written,
+            });
         }
-        self.verts = Vec::new();
-        self.tris = Vec::new();
         Ok(())
     }
 
-    /// One round: collapse, write, keep the open fans' vertices frozen.
-    fn flush(&mut self) -> io::Result<()> {
-        let mut chunk = Chunk::new(self)?;
-        chunk.collapse(self);
-        chunk.write(self)
+    /// The output index of input vertex `v` once passing straight on.
+    fn through_index(&self, th: Through, v: u32) -> io::Result<u32> {
+        if v >= th.base {
+            return Ok(th.out + (v - th.base));
+        }
+        self.frozen
+            .get(&v)
+            .map(|f| f.out)
+            .ok_or_else(|| io::Error::other("internal error: a vertex of a closed fan came again"))
     }
 }
 
 impl<S: Sampler> MeshSink for Decimator<'_, S> {
     fn vertex(&mut self, p: [f32; 3]) -> io::Result<()> {
-        if self.through {
+        if self.through.is_some() {
+            self.seen += 1;
+            self.written += 1;
             return self.inner.vertex(p);
         }
         self.verts.push(p);
@@ -278,12 +321,17 @@ impl<S: Sampler> MeshSink for Decimator<'_, S> {
     }
 
     fn triangle(&mut self, t: [u32; 3], corners: [[f32; 3]; 3]) -> io::Result<()> {
-        if self.through {
-            return self.inner.triangle(t, corners);
+        if let Some(th) = self.through {
+            let ids = [
+                self.through_index(th, t[0])?,
+                self.through_index(th, t[1])?,
+                self.through_index(th, t[2])?,
+            ];
+            return self.inner.triangle(ids, corners);
         }
         self.tris.push(t);
-        if self.tris.len() >= CHUNK {
-            self.pass_through()?;
+        if self.tris.len() >= self.chunk {
+            self.flush(true)?;
         }
         Ok(())
     }
@@ -432,6 +480,27 @@ impl Chunk {
     /// `b` is a crease vertex, or the surface there is flat.
     fn tried_for_itself(&self, b: u32, cost: f64, flat: f64) -> bool {
         self.crease[b as usize] || cost <= flat
+    }
+
+    /// Whether collapsing this chunk pays: enough collapses to try per vertex that may
+    /// take part ([`PAYS_PER_VERTEX`]).
+    fn pays(&self, tolerance: f64) -> bool {
+        let flat = flat_cost(tolerance);
+        let (mut tries, mut free) = (0usize, 0usize);
+        for v in 0..self.pos.len() as u32 {
+            if !self.free[v as usize] {
+                continue;
+            }
+            free += 1;
+            for w in self.neighbours(v) {
+                if self.free[w as usize]
+                    && (self.tried_for_itself(v, self.cost(v, w), flat) || self.crease[w as usize])
+                {
+                    tries += 1;
+                }
+            }
+        }
+        tries as f64 >= PAYS_PER_VERTEX * free as f64
     }
 
     /// Greedy collapses, cheapest first, in rounds until a round finds none (a collapse

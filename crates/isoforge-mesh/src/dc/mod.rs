@@ -18,7 +18,7 @@
 //! 5. `stream.rs`: the schedule, slab by slab along z, polygons handed on as soon as
 //!    they are known;
 //! 6. `decimate.rs`: with a tolerance, edge collapses checked against the field (on
-//!    meshes of up to 65,536 triangles; larger ones go on unchanged);
+//!    chunks of 65,536 triangles, for as long as collapsing pays);
 //! 7. `refine.rs`: with a tolerance, vertices off the surface moved onto it and triangles
 //!    that cut a crease split along it, then the [`MeshSink`].
 //!
