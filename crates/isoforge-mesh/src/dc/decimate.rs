@@ -492,15 +492,23 @@ impl Chunk {
                 continue;
             }
             free += 1;
-            for w in self.neighbours(v) {
-                if self.free[w as usize]
-                    && (self.tried_for_itself(v, self.cost(v, w), flat) || self.crease[w as usize])
-                {
-                    tries += 1;
-                }
-            }
+            tries += self
+                .neighbours(v)
+                .into_iter()
+                .filter(|&w| self.to_try(v, w, flat).is_some())
+                .count();
         }
         tries as f64 >= PAYS_PER_VERTEX * free as f64
+    }
+
+    /// The quadric cost of collapsing `b → a` when that collapse is to be tried: both fans
+    /// complete, and `b` a crease vertex or on a flat surface, or `a` on a crease.
+    fn to_try(&self, b: u32, a: u32, flat: f64) -> Option<f64> {
+        if !(self.free[b as usize] && self.free[a as usize]) {
+            return None;
+        }
+        let cost = self.cost(b, a);
+        (self.tried_for_itself(b, cost, flat) || self.crease[a as usize]).then_some(cost)
     }
 
     /// Greedy collapses, cheapest first, in rounds until a round finds none (a collapse
@@ -517,11 +525,8 @@ impl Chunk {
         // crease vertex itself, and it stops every collapse along the crease past it (the
         // triangles between would turn over). Elsewhere only where the surface is flat.
         let push = |c: &Chunk, heap: &mut BinaryHeap<_>, b: u32, a: u32| {
-            if c.free[b as usize] && c.free[a as usize] {
-                let cost = c.cost(b, a);
-                if c.tried_for_itself(b, cost, flat) || c.crease[a as usize] {
-                    heap.push(Reverse((cost.to_bits(), b, a)));
-                }
+            if let Some(cost) = c.to_try(b, a, flat) {
+                heap.push(Reverse((cost.to_bits(), b, a)));
             }
         };
         self.unfold_flaps(d);
