@@ -46,6 +46,7 @@ use std::io;
 
 use glam::DVec3;
 
+use super::narrowed::Narrowed;
 use super::sampler::Sampler;
 use crate::sink::MeshSink;
 
@@ -207,7 +208,8 @@ impl Quadric {
 pub struct Decimator<'a, S: Sampler> {
     sampler: &'a S,
     ev: S::Evals,
-    root: S::Local,
+    /// The field, narrowed to boxes around the points asked about.
+    field: Narrowed<S>,
     tolerance: f64,
     /// The finest cell's size.
     cell: f64,
@@ -244,7 +246,7 @@ impl<'a, S: Sampler> Decimator<'a, S> {
         Decimator {
             sampler,
             ev: sampler.evals(),
-            root: sampler.root(),
+            field: Narrowed::new(sampler, cell),
             tolerance,
             cell,
             inner,
@@ -751,7 +753,7 @@ impl Chunk {
             });
         for w in SAMPLES.iter().copied().chain(beside) {
             let p = t[0] * w[0] + t[1] * w[1] + t[2] * w[2];
-            let g = d.sampler.grad(&mut d.ev, &d.root, p.to_array());
+            let g = d.field.grad(d.sampler, &mut d.ev, p);
             let grad = DVec3::new(g[1], g[2], g[3]);
             let distance = g[0].abs() / grad.length();
             let faces_out = grad.dot(n) > FACING_COS * grad.length() * n.length();

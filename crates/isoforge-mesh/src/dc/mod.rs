@@ -32,6 +32,7 @@ pub mod estimate;
 pub mod hermite;
 pub mod leaf;
 pub mod merge;
+pub mod narrowed;
 pub mod octree;
 pub mod qef;
 pub mod refine;

@@ -65,8 +65,9 @@ use std::io;
 
 use glam::DVec3;
 
-use isoforge_field::{Bounds, Interval};
+use isoforge_field::Bounds;
 
+use super::narrowed::Narrowed;
 use super::sampler::Sampler;
 use crate::int_hash::IntMap;
 use crate::sink::MeshSink;
@@ -199,13 +200,6 @@ const APART: f64 = 1.0 / 32.0;
 /// A new vertex nearer an end of its edge than this share of the edge is not made.
 const NEAR_END: f64 = 0.1;
 
-/// The side of the boxes the field is narrowed on, in finest cells: a block's.
-const BOX_CELLS: f64 = 16.0;
-
-/// Narrowed fields kept at most (the stream goes slab by slab, so the last slab's boxes
-/// are what is needed).
-const BOXES_KEPT: usize = 4096;
-
 /// Positions remembered to keep vertices apart, in each of two generations: vertices come
 /// slab by slab, and one moved onto the surface lands within a cell of where it was made.
 const RECENT_KEPT: usize = 1 << 18;
@@ -250,7 +244,8 @@ impl Vert {
 pub struct Refiner<'a, S: Sampler> {
     sampler: &'a S,
     ev: S::Evals,
-    root: S::Local,
+    /// The field, narrowed to boxes near the latest vertices.
+    field: Narrowed<S>,
     tolerance: f64,
     /// The region's corners: a vertex moved onto the surface stays inside (Newton stops
     /// within a tenth of the tolerance, which can be a hair beyond a region's wall).
@@ -275,8 +270,6 @@ pub struct Refiner<'a, S: Sampler> {
     /// Positions of the latest vertices, and of those before them.
     recent: HashSet<[u32; 3]>,
     older: HashSet<[u32; 3]>,
-    /// The field narrowed to boxes near the latest vertices.
-    locals: HashMap<[i64; 3], S::Local>,
     /// The mesher's triangles waiting for their neighbours, by arrival, with how many of
     /// their edges have not yet been seen from the other side.
     held: IntMap<u64, ([u32; 3], u8)>,
@@ -317,7 +310,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             hi: DVec3::from(region.max),
             sampler,
             ev: sampler.evals(),
-            root: sampler.root(),
+            field: Narrowed::new(sampler, cell),
             tolerance,
             cell,
             inner,
@@ -329,7 +322,6 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             near_older: HashMap::new(),
             recent: HashSet::new(),
             older: HashSet::new(),
-            locals: HashMap::new(),
             held: IntMap::default(),
             queue: VecDeque::new(),
             arrived: 0,
@@ -456,42 +448,14 @@ impl<'a, S: Sampler> Refiner<'a, S> {
     /// F and the unit gradient at `p`, with |F| / |∇F|; `None` where the field says
     /// nothing useful (NaN, a zero gradient).
     fn probe(&mut self, p: DVec3) -> Option<(f64, DVec3, f64)> {
-        let local = self.local_at(p)?;
-        let g = self.sampler.grad(&mut self.ev, &local, p.to_array());
+        let local = self.field.around(self.sampler, &mut self.ev, p)?;
+        let g = self.sampler.grad(&mut self.ev, local, p.to_array());
         let grad = DVec3::new(g[1], g[2], g[3]);
         let slope = grad.length();
         if !g[0].is_finite() || !slope.is_finite() || slope <= 0.0 {
             return None;
         }
         Some((g[0], grad / slope, g[0].abs() / slope))
-    }
-
-    /// The field narrowed to the box around `p` (boxes of [`BOX_CELLS`] cells, plus a margin,
-    /// kept for the last few hundred): a model of many parts has a long tape, and its
-    /// gradient at every vertex on the whole tape cost spheres_chain at depth 9 three times
-    /// the mesher's own time. `None` off the lattice's numbers (a NaN point).
-    fn local_at(&mut self, p: DVec3) -> Option<S::Local> {
-        let size = BOX_CELLS * self.cell;
-        let key = (p / size).floor();
-        if !key.is_finite() || key.abs().max_element() > 1e15 {
-            return None;
-        }
-        let key = key.as_i64vec3().to_array();
-        if let Some(l) = self.locals.get(&key) {
-            return Some(l.clone());
-        }
-        let margin = self.cell;
-        let b = [0, 1, 2].map(|i| {
-            let lo = key[i] as f64 * size - margin;
-            Interval::try_from((lo, lo + size + 2.0 * margin)).unwrap_or(Interval::ENTIRE)
-        });
-        let _ = self.sampler.interval(&mut self.ev, &self.root, b);
-        let local = self.sampler.narrow(&mut self.ev, &self.root);
-        if self.locals.len() >= BOXES_KEPT {
-            self.locals.clear();
-        }
-        self.locals.insert(key, local.clone());
-        Some(local)
     }
 
     /// `p` moved onto the surface by Newton steps along the gradient, with the unit

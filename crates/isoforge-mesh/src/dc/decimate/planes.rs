@@ -91,9 +91,7 @@ impl Chunk {
         if let Some(p) = self.plane.get(v as usize).copied().flatten() {
             return Some(p.n);
         }
-        let g = d
-            .sampler
-            .grad(&mut d.ev, &d.root, self.pos[v as usize].to_array());
+        let g = d.field.grad(d.sampler, &mut d.ev, self.pos[v as usize]);
         let n = DVec3::new(g[1], g[2], g[3]).normalize_or_zero();
         (n != DVec3::ZERO && n.is_finite()).then_some(n)
     }
@@ -241,7 +239,7 @@ impl Chunk {
 /// The plane of the field at `p`, by its gradient there (where the field is linear,
 /// F / |∇F| is the distance to that plane exactly).
 fn plane_at<S: Sampler>(d: &mut Decimator<'_, S>, p: DVec3) -> Option<Plane> {
-    let g = d.sampler.grad(&mut d.ev, &d.root, p.to_array());
+    let g = d.field.grad(d.sampler, &mut d.ev, p);
     let grad = DVec3::new(g[1], g[2], g[3]);
     let n = grad.normalize_or_zero();
     (n != DVec3::ZERO && n.is_finite() && g[0].is_finite()).then(|| Plane {
@@ -272,7 +270,7 @@ pub(super) fn at_most_two<T: Copy>(
 
 /// Whether `p` is within `within` of the surface, by the field's first-order distance.
 fn on_surface<S: Sampler>(d: &mut Decimator<'_, S>, p: DVec3, within: f64) -> bool {
-    let g = d.sampler.grad(&mut d.ev, &d.root, p.to_array());
+    let g = d.field.grad(d.sampler, &mut d.ev, p);
     g[0].abs() <= within * DVec3::new(g[1], g[2], g[3]).length()
 }
 
