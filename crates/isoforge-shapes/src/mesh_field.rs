@@ -26,6 +26,10 @@ use isoforge_field::{CustomField, Interval, Shape};
 /// Triangles per leaf of the hierarchy.
 const LEAF: usize = 4;
 
+/// Nearer than this share of the mesh's size a point is on the surface, and the direction
+/// from its nearest point is rounding error.
+const ON_SURFACE: f64 = 1e-9;
+
 /// Room for the search's stack: median splits halve the triangles at every level, so a
 /// tree of up to 2^60 triangles is no deeper than 60 levels, and the search holds one
 /// waiting sibling per level plus the node in hand.
@@ -309,7 +313,18 @@ impl MeshField {
             away.dot(pseudo) >= 0.0
         };
         let sign = if outside { 1.0 } else { -1.0 };
-        let gradient = if d > 0.0 { away / d * sign } else { t.normal };
+        let gradient = match feature {
+            // Off a face the gradient is its normal, on either side; as `away / d` it is
+            // the difference of two nearly equal points where `p` is on the surface, and a
+            // crossing found by bisection is: one on drilled_import read (0, 0, -1) on a
+            // wall whose normal is (0.995, 0, -0.102), and dual contouring put the corner's
+            // vertex 0.14 mm off.
+            Feature::Face if !open => t.normal,
+            _ if d > ON_SURFACE * self.scale => away / d * sign,
+            // At an edge or a corner, on the surface: the feature's pseudo-normal, the
+            // gradient's average around it.
+            _ => pseudo.try_normalize().unwrap_or(t.normal),
+        };
         (sign * d, gradient, i)
     }
 
@@ -557,6 +572,47 @@ mod tests {
         let flipped: Vec<[u32; 3]> = t.iter().map(|t| [t[0], t[2], t[1]]).collect();
         let g = MeshField::new(&v, &flipped).unwrap();
         assert!(g.value([0.5, 0.5, 0.5]) < 0.0);
+    }
+
+    #[test]
+    fn on_a_face_the_gradient_is_its_normal() {
+        // A tetrahedron 20 mm across, 20 mm from the origin, as imported parts are: its
+        // slanted face x + y + z = 80 (shifted) is what the mesher's bisection lands on.
+        let v = [
+            [20.0, 20.0, 20.0],
+            [40.0, 20.0, 20.0],
+            [20.0, 40.0, 20.0],
+            [20.0, 20.0, 40.0],
+        ];
+        let t = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let f = MeshField::new(&v, &t).unwrap();
+        let normal = DVec3::splat(1.0 / 3f64.sqrt());
+        for k in 0..50 {
+            // A line through the face, bisected to the crossing as `hermite.rs` does, and
+            // on down to the last bit.
+            let s = 0.1 + 0.015 * f64::from(k);
+            let (mut inside, mut outside) = (
+                DVec3::new(25.0 + s, 24.0, 23.0 + s * 0.5),
+                DVec3::new(35.0 + s, 31.0, 29.0 - s),
+            );
+            assert!(f.value(inside.to_array()) < 0.0 && f.value(outside.to_array()) > 0.0);
+            for _ in 0..80 {
+                let mid = (inside + outside) * 0.5;
+                if f.value(mid.to_array()) < 0.0 {
+                    inside = mid;
+                } else {
+                    outside = mid;
+                }
+            }
+            for p in [inside, outside] {
+                let g = f.gradient(p.to_array());
+                let n = DVec3::new(g[1], g[2], g[3]);
+                assert!(g[0].abs() < 1e-12, "at {p}: {}", g[0]);
+                // The fault was a direction from the point to its nearest point, which on the
+                // surface is rounding error.
+                assert!((n - normal).length() < 1e-9, "at {p}: {n}");
+            }
+        }
     }
 
     #[test]
