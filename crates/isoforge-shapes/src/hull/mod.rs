@@ -205,12 +205,17 @@ impl HullField {
             let q = gjk::closest_on_triangle(p, *a, *b, *c);
             let d = (p - q).length();
             if d < best.0 {
+                // Nearest a point inside the facet (the distance is the plane's), the
+                // gradient is the facet's normal; as `(p − q) / d` it is rounding error
+                // where `p` is on the surface, as a crossing interpolated on a plane is
+                // (the same fault as `import_stl`'s, mesh_field.rs).
+                let on_facet = d - beyond <= self.tolerance;
                 best = (
                     d,
-                    if d > 0.0 {
-                        (p - q) / d
-                    } else {
+                    if on_facet || d == 0.0 {
                         DVec3::new(self.nx[k], self.ny[k], self.nz[k])
+                    } else {
+                        (p - q) / d
                     },
                 );
             }

@@ -88,6 +88,57 @@ fn hull_of_two_boxes_is_an_exact_distance() {
 }
 
 #[test]
+fn on_a_facet_the_gradient_is_its_normal() {
+    // A cube and a cube turned and moved away: the hull's facets between them are
+    // slanted. A line through each side of the bridge, bisected to the last bit (the
+    // mesher interpolates crossings on a plane about as finely).
+    let turn = glam::DMat3::from_euler(glam::EulerRot::XYZ, 0.5, 0.3, 0.2);
+    let s = field(vec![
+        Convex::new(Body::Box(DVec3::splat(5.0))).moved(DVec3::splat(20.0)),
+        Convex::new(Body::Box(DVec3::splat(3.0)))
+            .turned(turn)
+            .moved(DVec3::new(40.0, 27.0, 24.0)),
+    ]);
+    let tape = Tape::new(&s);
+    let mut ev = isoforge_field::GradEval::new();
+    let mut grad = |p: DVec3| {
+        let g = ev.eval(&tape, p.to_array());
+        (g.v, DVec3::from(g.d))
+    };
+    let mut checked = 0;
+    for k in 0..40 {
+        let a = f64::from(k) * std::f64::consts::TAU / 40.0;
+        let inside = DVec3::new(30.0, 23.5, 22.0);
+        let mut outside = inside + DVec3::new(0.0, a.cos(), a.sin()) * 20.0;
+        let mut inside = inside;
+        assert!(grad(inside).0 < 0.0 && grad(outside).0 > 0.0);
+        for _ in 0..80 {
+            let mid = (inside + outside) * 0.5;
+            if grad(mid).0 < 0.0 {
+                inside = mid;
+            } else {
+                outside = mid;
+            }
+        }
+        // Off the facet's middle, by the normals on both sides a little way off.
+        let (_, below) = grad(inside - (outside - inside).normalize() * 1e-3);
+        let (_, above) = grad(outside + (outside - inside).normalize() * 1e-3);
+        if (below - above).length() > 1e-12 {
+            continue; // an edge of the hull: no one normal
+        }
+        for p in [inside, outside] {
+            let (v, n) = grad(p);
+            assert!(v.abs() < 1e-9, "at {p}: {v}");
+            // The fault was the direction from the point to its nearest point, rounding
+            // error on the surface.
+            assert!((n - below).length() < 1e-9, "at {p}: {n} vs {below}");
+        }
+        checked += 1;
+    }
+    assert!(checked >= 20, "{checked} lines met a facet's middle");
+}
+
+#[test]
 fn hull_of_a_box_and_a_ball_contains_both_and_no_more() {
     let b = Convex::new(Body::Box(DVec3::splat(1.0)));
     let ball = Convex::ball(DVec3::new(5.0, 0.0, 0.0), 1.0);
