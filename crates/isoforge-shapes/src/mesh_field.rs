@@ -242,7 +242,8 @@ impl MeshField {
         };
         // Depth first, nearer child first: the stack holds at most one node per level
         // (median splits make the tree at most [`MAX_LEVELS`] deep), kept on the call's
-        // stack frame; a growing vector here was a third of an imported model's meshing time.
+        // stack frame; a vector grown on every query was a seventh of drilled_import's
+        // meshing time under perf.
         let mut stack = [0usize; MAX_LEVELS];
         let mut len = 1;
         while len > 0 {
@@ -577,7 +578,7 @@ mod tests {
     #[test]
     fn on_a_face_the_gradient_is_its_normal() {
         // A tetrahedron 20 mm across, 20 mm from the origin, as imported parts are: its
-        // slanted face x + y + z = 80 (shifted) is what the mesher's bisection lands on.
+        // slanted face x + y + z = 80 is what the mesher's bisection lands on.
         let v = [
             [20.0, 20.0, 20.0],
             [40.0, 20.0, 20.0],
