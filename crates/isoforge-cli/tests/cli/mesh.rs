@@ -317,6 +317,47 @@ fn hulls_of_boxes_and_imported_meshes_merge_and_hold_the_tolerance() {
 }
 
 #[test]
+fn a_model_meshes_to_the_same_bytes_on_one_thread_or_several() {
+    // Slabs are meshed in parallel and written in order, so the file may not depend on
+    // how the work was shared out. Hulls of boxes once gave 834 or 872 triangles from run
+    // to run (their gradients on the surface were rounding error), and a hull of two of
+    // them 40 or 54 at depth 7 (its facets came in a set's order); an imported mesh, a
+    // gyroid and a model with creases and a cone's tip take every stage of the pipeline.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let hull = dir.path().join("hull_boxes.rhai");
+    std::fs::write(
+        &hull,
+        "bounds([-12, -12, -12], [32, 32, 32]);\n\
+         hull([box([10, 10, 10]).rotate_z(20), box([6, 6, 6]).rotate_x(30).move([20, 15, 10])])\n",
+    )
+    .expect("write the model");
+    let models = [
+        hull,
+        fixtures().join("modern/drilled_import.rhai"),
+        fixtures().join("bench/gyroid_sphere.rhai"),
+        fixtures().join("classic/spaceship.rhai"),
+    ];
+    for model in &models {
+        let mut files = Vec::new();
+        for threads in ["1", "2", "3"] {
+            let out = dir.path().join(format!("on_{threads}.stl"));
+            let run = std::process::Command::new(crate::isoforge_bin())
+                .args(["mesh", s(model), "--depth", "7", "-o", s(&out)])
+                .env("RAYON_NUM_THREADS", threads)
+                .output()
+                .expect("isoforge runs");
+            assert!(run.status.success(), "{model:?} on {threads} threads");
+            files.push(std::fs::read(&out).expect("the output"));
+        }
+        assert!(files[0].len() > 84, "{model:?}: an empty mesh");
+        assert!(
+            files.iter().all(|f| *f == files[0]),
+            "{model:?}: the files differ"
+        );
+    }
+}
+
+#[test]
 fn box_like_models_take_few_triangles() {
     // Flat faces merge into large cells: an axis-aligned box at depth 9 (512 cells along
     // its region) is a few hundred triangles, not hundreds of thousands, and keeps its
