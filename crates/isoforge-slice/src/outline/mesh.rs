@@ -74,7 +74,8 @@ pub fn check_sliceable(mesh: &Mesh) -> Result<(), SliceError> {
         .keys()
         .filter(|&&(a, b)| !directed.contains_key(&(b, a)))
         .collect();
-    if let Some(&&(a, _)) = open.first() {
+    // The lowest edge, not the map's first: the error names the same place on every run.
+    if let Some(&&(a, _)) = open.iter().min() {
         return Err(MeshProblem::Open {
             edges: open.len(),
             near: at(mesh, a),
