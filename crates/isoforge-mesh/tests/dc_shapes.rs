@@ -884,3 +884,20 @@ fn a_bitten_ball_under_a_cell_stays_closed() {
     .expect("a box");
     stays_outward_at_large_tolerances(&shape, bounds, 4, "bitten ball under a cell");
 }
+
+/// A ball 1.14 cells wide at a tolerance of 3 cells (a seed of the random CSG test, session
+/// 31): the merge and the collapses left a flat tetrahedron with one corner 1.6 cells off
+/// the ball, at the region's side; the refiner moved two others half a cell onto the ball
+/// (the ball was thick enough behind them for the refiner's `THICK_CELLS` of 1.0), and the
+/// tetrahedron turned over (volume −0.0003).
+#[test]
+fn a_ball_a_cell_wide_stays_outward_at_a_large_tolerance() {
+    let lo = [
+        -1.128_367_852_065_909_7,
+        -1.117_799_594_557_272_3,
+        -1.070_037_915_704_128_2,
+    ];
+    let hi = [1.275_555_973_685_727_8, 0.8, 0.8];
+    let ball = ([0.0, -0.5, 0.0], 0.171_074_936_092_517_4);
+    ball_stays_outward(ball, (lo, hi), 3, Some(3.0), "ball a cell wide, 3 cells");
+}
