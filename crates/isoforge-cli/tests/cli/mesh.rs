@@ -384,6 +384,47 @@ fn box_like_models_take_few_triangles() {
 }
 
 #[test]
+fn a_sheet_thinner_than_a_cell_takes_not_many_more_triangles_than_the_uniform_mesh() {
+    // A gyroid sheet a third of a cell thick: every chord from one side of it to the other
+    // has its middle inside, and splitting it leaves a half that crosses again. The
+    // refiner split such chords down to its level cap: 3,972 triangles at the default
+    // tolerance for the uniform mesh's 708, its largest distance no better (0.110 and
+    // 0.109 mm).
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = dir.path().join("thin_gyroid.rhai");
+    std::fs::write(
+        &model,
+        "bounds([-10, -10, -10], [10, 10, 10]);\n\
+         intersection(gyroid(8, 0.22), sphere(3))\n",
+    )
+    .expect("write the model");
+    let out = dir.path().join("out.stl");
+    let measured = |extra: &[&str]| {
+        let mut args = vec!["--depth", "5"];
+        args.extend_from_slice(extra);
+        let json = mesh_ok(&model, &out, &args);
+        let run = isoforge(&["check", s(&out), "--against", s(&model), "--json"]);
+        assert!(run.status.success());
+        let check: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+        (
+            json["triangles"].as_u64().unwrap_or(u64::MAX),
+            check["max_deviation"].as_f64().unwrap_or(f64::MAX),
+            check["mean_deviation"].as_f64().unwrap_or(f64::MAX),
+        )
+    };
+    let (uniform, uniform_max, uniform_mean) = measured(&["--tolerance", "0"]);
+    let (refined, max, mean) = measured(&[]);
+    assert!(
+        refined <= 2 * uniform,
+        "{refined} triangles at the default tolerance, {uniform} uniform"
+    );
+    assert!(
+        max <= 1.05 * uniform_max && mean <= uniform_mean,
+        "largest {max} (uniform {uniform_max}), mean {mean} (uniform {uniform_mean})"
+    );
+}
+
+#[test]
 fn bad_tolerances_exit_2_and_write_nothing() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("x.stl");
