@@ -425,6 +425,32 @@ fn a_sheet_thinner_than_a_cell_takes_not_many_more_triangles_than_the_uniform_me
 }
 
 #[test]
+fn a_twisted_solid_needs_no_region_given() {
+    // Intervals over a box far off the axis see every turn of a twisted slice, so nothing
+    // far away was pruned: both models below were refused ("the model has no region",
+    // "shape 1 of the hull is not bounded") until `twist` cut its field to the cylinder
+    // that holds the solid.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out.stl");
+    for (name, src, volume) in [
+        ("twisted_box", "twist(box([4, 4, 10]), 10)\n", Some(160.0)),
+        (
+            "hull_of_a_twist",
+            "hull([twist(capsule([2, -1, 0], [2, -3, 1], 1.5), 25), sphere(1)])\n",
+            None,
+        ),
+    ] {
+        let model = dir.path().join(format!("{name}.rhai"));
+        std::fs::write(&model, src).expect("write the model");
+        let json = mesh_ok(&model, &out, &["--depth", "6"]);
+        if let Some(v) = volume {
+            let got = json["volume"].as_f64().unwrap_or(0.0);
+            assert!((got - v).abs() < 0.01 * v, "{name}: volume {got}");
+        }
+    }
+}
+
+#[test]
 fn bad_tolerances_exit_2_and_write_nothing() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("x.stl");

@@ -168,6 +168,14 @@ fn transforms_move_the_solid_the_right_way() {
     assert!(at(&tw, [1.5, 0.0, 0.0]) < 0.0);
     assert!(at(&tw, [0.0, 1.5, 1.0]) < 0.0);
     assert!(at(&tw, [1.5, 0.0, 1.0]) > 0.0);
+    // It has a region of its own, within the cylinder that holds the bar's turns.
+    let region = isoforge_field::find_bounds(&tw).expect("a twisted bar is bounded");
+    let reach = (2.0f64.hypot(0.25) + 0.5) * 1.2;
+    assert!(
+        (0..2).all(|a| region.min[a] > -reach && region.max[a] < reach),
+        "{region:?}"
+    );
+    assert!(region.min[2] > -6.0 && region.max[2] < 6.0, "{region:?}");
 }
 
 #[test]

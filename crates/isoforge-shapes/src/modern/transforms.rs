@@ -7,7 +7,7 @@
 //! more than the true distance), and `twist` keeps the surface but not distances.
 
 use glam::{DMat3, DVec3};
-use isoforge_field::Shape;
+use isoforge_field::{Shape, find_bounds};
 
 use super::{ModernError, finite, finite3};
 
@@ -166,6 +166,13 @@ pub fn mirror_z(s: &Shape) -> Shape {
 
 /// `twist(s, deg_per_mm)`: each slice z = h turned about the z axis by `h · deg_per_mm`
 /// degrees (right-handed).
+///
+/// A twist keeps each point's distance from the z axis and its height, so a bounded solid
+/// stays within the cylinder about z that holds its region; the field is cut to that
+/// cylinder (grown by a margin, so the surface is never on it). Without it, intervals
+/// over a box far off the axis see every turn of the slice (x·cos + y·sin may be zero),
+/// nothing far away is pruned, and a twisted box had no region of its own: a model
+/// `twist(box(..), 10)` asked for `bounds()`, and a hull of it could not be built.
 pub fn twist(s: &Shape, deg_per_mm: f64) -> Result<Shape, ModernError> {
     let rate = finite("the twist rate", deg_per_mm)?.to_radians();
     let [x, y, z] = xyz();
@@ -173,5 +180,18 @@ pub fn twist(s: &Shape, deg_per_mm: f64) -> Result<Shape, ModernError> {
     let (c, sn) = (angle.cos(), angle.sin());
     let xs = &x * &c + &y * &sn;
     let ys = &y * &c - &x * &sn;
-    Ok(s.remap(&xs, &ys, &z))
+    let twisted = s.remap(&xs, &ys, &z);
+    let Ok(region) = find_bounds(s) else {
+        // Not bounded (a gyroid, a half-space): nothing to cut to.
+        return Ok(twisted);
+    };
+    let (lo, hi) = (region.min, region.max);
+    let radius = [lo[0], hi[0]]
+        .iter()
+        .flat_map(|&a| [lo[1], hi[1]].map(|b| a.hypot(b)))
+        .fold(0.0, f64::max);
+    let margin = 0.05 * radius.max(hi[2] - lo[2]);
+    let around = (x.square() + y.square()).sqrt() - (radius + margin);
+    let along = (Shape::constant(lo[2] - margin) - &z).max(&(&z - (hi[2] + margin)));
+    Ok(twisted.max(&around.max(&along)))
 }
