@@ -44,6 +44,19 @@ pub(crate) fn mesh_ok(model: &Path, out: &Path, extra: &[&str]) -> serde_json::V
     json
 }
 
+/// `isoforge check MESH --against MODEL --json`: expects success; returns the JSON (the
+/// largest and mean distance from the model's surface, by its field).
+fn check_against(mesh: &Path, model: &Path) -> serde_json::Value {
+    let run = isoforge(&["check", s(mesh), "--against", s(model), "--json"]);
+    assert!(
+        run.status.success(),
+        "{}: {}",
+        model.display(),
+        String::from_utf8_lossy(&run.stderr)
+    );
+    serde_json::from_slice(&run.stdout).expect("--json prints one JSON object")
+}
+
 pub(crate) fn models(dir: &str) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(fixtures().join(dir))
         .expect("fixtures folder")
@@ -274,9 +287,7 @@ fn tolerance_trades_triangles_for_distance() {
             args.extend(["--tolerance", t]);
         }
         mesh_ok(&sphere, &out, &args);
-        let run = isoforge(&["check", s(&out), "--against", s(&sphere), "--json"]);
-        assert!(run.status.success());
-        let json: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+        let json = check_against(&out, &sphere);
         let max = json["max_deviation"].as_f64().unwrap_or(f64::MAX);
         assert!(max <= tolerance, "max deviation {max} > {tolerance}");
     }
@@ -307,9 +318,7 @@ fn hulls_of_boxes_and_imported_meshes_merge_and_hold_the_tolerance() {
         let triangles = json["triangles"].as_u64().unwrap_or(u64::MAX);
         assert!(triangles < most, "{model:?}: {triangles} triangles");
         let tolerance = json["tolerance"].as_f64().unwrap_or(0.0);
-        let run = isoforge(&["check", s(&out), "--against", s(model), "--json"]);
-        assert!(run.status.success());
-        let check: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+        let check = check_against(&out, model);
         let max = check["max_deviation"].as_f64().unwrap_or(f64::MAX);
         assert!(max <= tolerance, "{model:?}: {max} > {tolerance}");
         assert_eq!(check["closed_manifold"], serde_json::Value::Bool(true));
@@ -403,9 +412,7 @@ fn a_sheet_thinner_than_a_cell_takes_not_many_more_triangles_than_the_uniform_me
         let mut args = vec!["--depth", "5"];
         args.extend_from_slice(extra);
         let json = mesh_ok(&model, &out, &args);
-        let run = isoforge(&["check", s(&out), "--against", s(&model), "--json"]);
-        assert!(run.status.success());
-        let check: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+        let check = check_against(&out, &model);
         (
             json["triangles"].as_u64().unwrap_or(u64::MAX),
             check["max_deviation"].as_f64().unwrap_or(f64::MAX),
