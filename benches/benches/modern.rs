@@ -50,3 +50,23 @@ fn d8(bencher: Bencher, name: &str) {
 fn d9(bencher: Bencher, name: &str) {
     bench_model(bencher, name, 9);
 }
+
+/// A hull of a part that is no known convex body (a torus), so sampled: a polytope of
+/// about 1,300 facets, whose field is read group by group (`hull/planes.rs`). Its meshing
+/// time is nearly all that field.
+const SAMPLED_HULL: &str = "bounds([-5, -5, -3], [5, 5, 3]);\nhull([torus(3, 1)])\n";
+
+#[divan::bench(args = [7, 8], sample_count = 3, sample_size = 1)]
+fn sampled_hull(bencher: Bencher, depth: u8) {
+    let model =
+        isoforge_script::load_script(std::path::Path::new("sampled_hull.rhai"), SAMPLED_HULL, &[])
+            .unwrap_or_else(|e| panic!("sampled_hull: {e}"));
+    let Some(bounds) = model.bounds else {
+        panic!("sampled_hull: the script declares its bounds")
+    };
+    let settings = MeshSettings::new(bounds, depth);
+    bencher.bench(|| {
+        let mesh = mesh_shape(&model.shape, &settings);
+        divan::black_box(mesh.triangles.len())
+    });
+}

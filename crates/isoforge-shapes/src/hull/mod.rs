@@ -30,15 +30,18 @@
 
 pub mod convex;
 pub mod gjk;
+mod planes;
 pub mod polytope;
 mod sample;
 
 use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::DVec3;
 use isoforge_field::{CustomField, Interval, Shape};
 
 pub use convex::{Body, Convex};
+use planes::PlaneSet;
 use polytope::{Facet, hull_facets, hull_triangles, sphere_directions};
 pub use sample::{SAMPLES, sampled_part};
 
@@ -70,6 +73,21 @@ pub enum HullError {
 /// part's radius is below what a printer resolves.
 const DIRECTION_LEVEL: u32 = 2;
 
+/// Where a point's value was found, as a start for its neighbour's: GJK's direction to the
+/// core, or the nearest facet of a polytope.
+#[derive(Default)]
+struct Hint {
+    towards: DVec3,
+    facet: usize,
+}
+
+/// The nearest facet of a polytope found so far.
+struct Nearest {
+    distance: f64,
+    facet: usize,
+    gradient: DVec3,
+}
+
 /// The hull's field: GJK outside, supporting planes inside.
 pub struct HullField {
     /// The hull without the ball all its parts are grown by (see [`Convex::core`]); a
@@ -80,16 +98,21 @@ pub struct HullField {
     /// The core is a polytope and the planes are its facets (moved out by `grown`): then
     /// the field is the exact signed distance everywhere.
     exact: bool,
-    /// Supporting planes (normal, support value), struct-of-arrays for a fast max.
-    nx: Vec<f64>,
-    ny: Vec<f64>,
-    nz: Vec<f64>,
-    h: Vec<f64>,
+    /// Supporting planes (normal, support value), grouped by direction for a fast max.
+    planes: PlaneSet,
     /// Facets of the polytope spanned by support points (inside the hull).
     inner: Option<Vec<Facet>>,
-    /// In exact mode, the core polytope's facets as triangles (plane offset, corners):
-    /// outside it the nearest point is on a facet the point lies beyond.
+    /// In exact mode, the core polytope's facets as triangles (plane offset, corners), in
+    /// the order of `planes`: outside it the nearest point is on a facet the point lies
+    /// beyond.
     triangles: Vec<(f64, [DVec3; 3])>,
+    /// The facet nearest the last single point (see `shared_hint`).
+    last_facet: AtomicUsize,
+    /// A disc around each triangle in its plane (centre, radius).
+    triangle_balls: Vec<(DVec3, f64)>,
+    /// A ball around each plane group's triangles (centre, radius): a group whose ball
+    /// is farther than the nearest facet found so far is passed over.
+    group_balls: Vec<(DVec3, f64)>,
     /// GJK's accuracy, and the margin added to enclosures for it.
     tolerance: f64,
 }
@@ -97,8 +120,7 @@ pub struct HullField {
 impl HullField {
     /// The field of a convex body's surface.
     pub fn new(body: Convex) -> HullField {
-        let (lo, hi) = body.bounds();
-        let scale = (hi - lo).length().max(1e-9);
+        let body = &body;
         let (core, grown) = body.core();
         if let Some(points) = core.polytope_points() {
             // A polytope grown by a ball: its facets give the exact distance inside and
@@ -108,13 +130,12 @@ impl HullField {
                     .iter()
                     .map(|(f, _)| (f.normal, f.offset + grown))
                     .collect();
-                let mut field = HullField::with_planes(core, grown, true, &planes, None, scale);
-                field.triangles = tris.iter().map(|(f, c)| (f.offset, *c)).collect();
-                return field;
+                let triangles = tris.iter().map(|(f, c)| (f.offset, *c)).collect();
+                return HullField::with_planes(core, grown, true, &planes, None, triangles, body);
             }
             // A flat core (a point, a segment, a triangle): GJK on its few corners.
             let corners = Convex::new(Body::Points(points.into()));
-            return HullField::with_planes(corners, grown, true, &[], None, scale);
+            return HullField::with_planes(corners, grown, true, &[], None, Vec::new(), body);
         }
         let dirs = sphere_directions(DIRECTION_LEVEL);
         let points: Vec<DVec3> = dirs.iter().map(|&n| body.support(n)).collect();
@@ -127,42 +148,63 @@ impl HullField {
             .iter()
             .map(|&n| (n, body.support(n).dot(n)))
             .collect();
-        HullField::with_planes(core, grown, false, &planes, inner, scale)
+        HullField::with_planes(core, grown, false, &planes, inner, Vec::new(), body)
     }
 
+    /// `triangles`, when given, are the planes' facets in the same order.
     fn with_planes(
         core: Convex,
         grown: f64,
         exact: bool,
         planes: &[(DVec3, f64)],
         inner: Option<Vec<Facet>>,
-        scale: f64,
+        triangles: Vec<(f64, [DVec3; 3])>,
+        body: &Convex,
     ) -> HullField {
+        let (lo, hi) = body.bounds();
+        let (planes, order) = PlaneSet::new(planes, (lo + hi) * 0.5);
+        let triangles: Vec<(f64, [DVec3; 3])> = if triangles.is_empty() {
+            triangles
+        } else {
+            order.iter().map(|&i| triangles[i]).collect()
+        };
+        let group_balls = if triangles.is_empty() {
+            Vec::new()
+        } else {
+            planes
+                .groups()
+                .map(|(_, members)| {
+                    let corners = || members.clone().flat_map(|k| triangles[k].1);
+                    let centre = corners().sum::<DVec3>() / (3 * members.len()) as f64;
+                    let radius = corners().map(|c| (c - centre).length()).fold(0.0, f64::max);
+                    // A little larger, for rounding.
+                    (centre, radius * (1.0 + 1e-9) + 1e-12)
+                })
+                .collect()
+        };
+        let triangle_balls = triangles
+            .iter()
+            .map(|(_, corners)| {
+                let centre = (corners[0] + corners[1] + corners[2]) / 3.0;
+                let radius = corners
+                    .iter()
+                    .map(|&c| (c - centre).length())
+                    .fold(0.0, f64::max);
+                (centre, radius * (1.0 + 1e-9) + 1e-12)
+            })
+            .collect();
         HullField {
+            last_facet: AtomicUsize::new(0),
+            triangle_balls,
+            group_balls,
             core,
             grown,
             exact,
-            nx: planes.iter().map(|(n, _)| n.x).collect(),
-            ny: planes.iter().map(|(n, _)| n.y).collect(),
-            nz: planes.iter().map(|(n, _)| n.z).collect(),
-            h: planes.iter().map(|(_, h)| *h).collect(),
+            planes,
             inner,
-            triangles: Vec::new(),
-            tolerance: 1e-9 * scale,
+            triangles,
+            tolerance: 1e-9 * (hi - lo).length().max(1e-9),
         }
-    }
-
-    /// The largest signed distance to a supporting plane, and that plane's index
-    /// (`-inf` when there are none: a flat core, whose inside has no volume).
-    fn planes(&self, p: DVec3) -> (f64, usize) {
-        let mut best = (f64::NEG_INFINITY, 0);
-        for i in 0..self.h.len() {
-            let d = self.nx[i] * p.x + self.ny[i] * p.y + self.nz[i] * p.z - self.h[i];
-            if d > best.0 {
-                best = (d, i);
-            }
-        }
-        best
     }
 
     /// The depth of `p` in the inner polytope (0 outside it or without one).
@@ -190,58 +232,126 @@ impl HullField {
         Some((c.distance - self.grown, -d / c.distance, d))
     }
 
-    /// The exact value and gradient for a polytope core with triangles.
-    fn at_polytope(&self, p: DVec3) -> (f64, DVec3) {
-        let (v, i) = self.planes(p);
-        if v + self.grown <= 0.0 {
-            return (v, DVec3::new(self.nx[i], self.ny[i], self.nz[i]));
-        }
-        let mut best = (f64::INFINITY, DVec3::Z);
-        for (k, (offset, [a, b, c])) in self.triangles.iter().enumerate() {
-            let beyond = self.nx[k] * p.x + self.ny[k] * p.y + self.nz[k] * p.z - offset;
-            if beyond <= 0.0 || beyond >= best.0 {
-                continue; // not beyond this facet, or farther than the best already
+    /// The exact value and gradient for a polytope core with triangles. `facet` carries
+    /// the facet nearest the last point between neighbours.
+    fn at_polytope(&self, p: DVec3, facet: &mut usize) -> (f64, DVec3) {
+        let mut first = *facet;
+        if self.planes.value(first, p) + self.grown <= 0.0 {
+            // Not beyond the last point's facet: inside, or beyond another.
+            let (v, i) = self.planes.max(p);
+            if v + self.grown <= 0.0 {
+                *facet = i;
+                return (v, self.planes.normal(i));
             }
-            let q = gjk::closest_on_triangle(p, *a, *b, *c);
-            let d = (p - q).length();
-            if d < best.0 {
-                // Nearest a point inside the facet (the distance is the plane's), the
-                // gradient is the facet's normal; as `(p − q) / d` it is rounding error
-                // where `p` is on the surface, as a crossing interpolated on a plane is
-                // (the same fault as `import_stl`'s, mesh_field.rs).
-                let on_facet = d - beyond <= self.tolerance;
-                best = (
-                    d,
-                    if on_facet || d == 0.0 {
-                        DVec3::new(self.nx[k], self.ny[k], self.nz[k])
-                    } else {
-                        (p - q) / d
-                    },
-                );
+            // The facet the point is farthest beyond: near the surface its triangle
+            // mostly holds the nearest point.
+            first = i;
+        }
+        // Outside. The first facet's distance lets every group whose triangles are all
+        // farther, or whose planes the point is not beyond, be passed over.
+        let mut best = Nearest {
+            distance: f64::INFINITY,
+            facet: usize::MAX,
+            gradient: DVec3::Z,
+        };
+        self.nearer_on_facet(first, p, &mut best);
+        let seen = self.planes.seen_from_origin(p);
+        for (g, range) in self.planes.groups() {
+            let (centre, radius) = self.group_balls[g];
+            if (p - centre).length() - radius > best.distance
+                || !self.planes.may_exceed(g, &seen, -self.grown)
+            {
+                continue;
+            }
+            for k in range {
+                if k != first {
+                    self.nearer_on_facet(k, p, &mut best);
+                }
             }
         }
-        (best.0 - self.grown, best.1)
+        *facet = best.facet.min(self.triangles.len() - 1);
+        (best.distance - self.grown, best.gradient)
     }
 
-    /// The value and gradient at `p`; `hint` carries GJK's start between neighbours.
-    fn at(&self, p: DVec3, hint: &mut DVec3) -> (f64, DVec3) {
-        if !self.triangles.is_empty() {
-            return self.at_polytope(p);
+    /// Facet `k`'s nearest point to `p`, kept in `best` when nearer (or as near, with a
+    /// lower index: the answer does not depend on the order facets are read in, which
+    /// the hint changes).
+    fn nearer_on_facet(&self, k: usize, p: DVec3, best: &mut Nearest) {
+        let (offset, [a, b, c]) = &self.triangles[k];
+        let beyond = self.planes.normal(k).dot(p) - offset;
+        if beyond <= 0.0 || beyond > best.distance {
+            return; // not beyond this facet, or farther than the best already
         }
-        match self.outside_core(p, *hint) {
+        // Nor nearer than the plane's distance and, across the plane, the way from p's
+        // foot to the disc around the triangle (many facets of a curved part lie nearly
+        // in one plane, and the plane's distance alone passes them all).
+        let (centre, radius) = self.triangle_balls[k];
+        let across = ((p - centre).length_squared() - beyond * beyond)
+            .max(0.0)
+            .sqrt();
+        let outside_disc = (across - radius).max(0.0);
+        if beyond * beyond + outside_disc * outside_disc > best.distance * best.distance {
+            return;
+        }
+        let q = gjk::closest_on_triangle(p, *a, *b, *c);
+        let d = (p - q).length();
+        if d > best.distance || d == best.distance && k > best.facet {
+            return;
+        }
+        // Nearest a point inside the facet (the distance is the plane's), the gradient is
+        // the facet's normal; as `(p − q) / d` it is rounding error where `p` is on the
+        // surface, as a crossing interpolated on a plane is (the same fault as
+        // `import_stl`'s, mesh_field.rs).
+        let on_facet = d - beyond <= self.tolerance;
+        *best = Nearest {
+            distance: d,
+            facet: k,
+            gradient: if on_facet || d == 0.0 {
+                self.planes.normal(k)
+            } else {
+                (p - q) / d
+            },
+        };
+    }
+
+    /// Single points come one by one (the collapses, the refiner), mostly near the last
+    /// one: the last facet found is their hint. A polytope's answer does not depend on
+    /// it, so threads may share it; GJK's start is not shared (its answer varies within
+    /// its accuracy with the start).
+    fn shared_hint(&self) -> Hint {
+        Hint {
+            towards: DVec3::ZERO,
+            facet: self.last_facet.load(Ordering::Relaxed),
+        }
+    }
+
+    fn at_shared(&self, p: DVec3) -> (f64, DVec3) {
+        let mut hint = self.shared_hint();
+        let answer = self.at(p, &mut hint);
+        self.last_facet.store(hint.facet, Ordering::Relaxed);
+        answer
+    }
+
+    /// The value and gradient at `p`; `hint` carries where the last point's answer was
+    /// found, for its neighbour.
+    fn at(&self, p: DVec3, hint: &mut Hint) -> (f64, DVec3) {
+        if !self.triangles.is_empty() {
+            return self.at_polytope(p, &mut hint.facet);
+        }
+        match self.outside_core(p, hint.towards) {
             // Outside the hull the GJK distance is exact; inside it (within the grown
             // ball of the core) exact too.
             Some((v, normal, towards)) if v > 0.0 || self.grown > 0.0 => {
-                *hint = towards;
+                hint.towards = towards;
                 (v, normal)
             }
             _ => {
-                if self.h.is_empty() {
+                if self.planes.is_empty() {
                     // On a flat core (a segment, a triangle): as deep as the ball.
                     return (-self.grown, DVec3::Z);
                 }
-                let (v, i) = self.planes(p);
-                (v, DVec3::new(self.nx[i], self.ny[i], self.nz[i]))
+                let (v, i) = self.planes.max(p);
+                (v, self.planes.normal(i))
             }
         }
     }
@@ -253,15 +363,16 @@ impl CustomField for HullField {
     }
 
     fn value(&self, p: [f64; 3]) -> f64 {
-        self.at(DVec3::from(p), &mut DVec3::default()).0
+        self.at_shared(DVec3::from(p)).0
     }
 
     fn values(&self, xs: &[f64], ys: &[f64], zs: &[f64], out: &mut [f64]) {
         // Neighbouring points have neighbouring nearest points: start each GJK there.
-        let mut hint = DVec3::ZERO;
+        let mut hint = self.shared_hint();
         for (i, o) in out.iter_mut().enumerate() {
             *o = self.at(DVec3::new(xs[i], ys[i], zs[i]), &mut hint).0;
         }
+        self.last_facet.store(hint.facet, Ordering::Relaxed);
     }
 
     fn interval(&self, b: [Interval; 3]) -> Interval {
@@ -278,11 +389,11 @@ impl CustomField for HullField {
         let margin = 2.0 * self.tolerance + 1e-12 * c.length();
         if self.exact {
             // The exact signed distance is 1-Lipschitz.
-            let v = self.at(c, &mut DVec3::default()).0;
+            let v = self.at(c, &mut Hint::default()).0;
             return Interval::try_from((v - r - margin, v + r + margin))
                 .unwrap_or(Interval::ENTIRE);
         }
-        let lower = self.planes(c).0 - r - margin;
+        let lower = self.planes.max(c).0 - r - margin;
         // Outside the core GJK's distance is exact; inside it, the inner polytope's depth
         // is at most the hull's.
         let upper = match self.outside_core(c, DVec3::ZERO) {
@@ -293,7 +404,7 @@ impl CustomField for HullField {
     }
 
     fn gradient(&self, p: [f64; 3]) -> [f64; 4] {
-        let (v, n) = self.at(DVec3::from(p), &mut DVec3::default());
+        let (v, n) = self.at_shared(DVec3::from(p));
         [v, n.x, n.y, n.z]
     }
 

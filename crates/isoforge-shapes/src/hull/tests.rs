@@ -184,6 +184,48 @@ fn a_sampled_field_is_hulled_within_a_cell() {
     );
 }
 
+#[test]
+fn a_sampled_hull_is_the_exact_distance_to_its_points_hull() {
+    // A torus is no known body: its hull is a polytope of about 1,300 facets, read group
+    // by group (planes.rs). Every value must be what all facets give, read one by one.
+    let (x, y, z) = (Shape::x() - 1.0, Shape::y() + 2.0, Shape::z() - 0.5);
+    let ring = (x.square() + y.square()).sqrt() - 3.0;
+    let torus = (ring.square() + z.square()).sqrt() - 1.0;
+    let body = sampled_part(&torus, 1).expect("sampled");
+    let (s, _) = hull(vec![HullPart::Convex(body.clone())]).expect("builds");
+    let points = body.polytope_points().expect("a polytope");
+    let tris = polytope::hull_triangles(&points).expect("spans a volume");
+    assert!(tris.len() > 500, "{} facets", tris.len());
+    let brute = |p: DVec3| {
+        let plane = tris
+            .iter()
+            .map(|(f, _)| f.normal.dot(p) - f.offset)
+            .fold(f64::NEG_INFINITY, f64::max);
+        if plane <= 0.0 {
+            return plane;
+        }
+        tris.iter()
+            .map(|(_, [a, b, c])| (p - gjk::closest_on_triangle(p, *a, *b, *c)).length())
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut checked = 0;
+    for i in 0..=16 {
+        for j in 0..=16 {
+            for k in 0..=8 {
+                let p = DVec3::new(
+                    -5.0 + 0.7 * i as f64,
+                    -7.9 + 0.7 * j as f64,
+                    -2.3 + 0.6 * k as f64,
+                );
+                let (got, want) = (at(&s, p), brute(p));
+                assert!((got - want).abs() < 1e-9, "{p}: {got} against {want}");
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 17 * 17 * 9);
+}
+
 fn boxed(lo: [f64; 3], size: f64) -> [Interval; 3] {
     [0, 1, 2].map(|i| Interval::try_from((lo[i], lo[i] + size)).expect("box"))
 }
