@@ -477,3 +477,46 @@ fn bad_tolerances_exit_2_and_write_nothing() {
         assert!(!out.exists(), "--tolerance {t} wrote a file");
     }
 }
+
+#[test]
+fn a_model_thinner_than_the_lattice_gets_a_note() {
+    // A gyroid sheet a third of a cell thick at depth 5, resolved at depth 7: the triangles
+    // that join its two sides are counted, and when they are many the user is told why the
+    // mesh may be off and what to do.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = dir.path().join("thin_gyroid.rhai");
+    std::fs::write(
+        &model,
+        "bounds([-10, -10, -10], [10, 10, 10]);\n\
+         intersection(gyroid(8, 0.22), sphere(3))\n",
+    )
+    .expect("write the model");
+    let out = dir.path().join("out.stl");
+    let run = |depth: &str| {
+        let run = isoforge(&["mesh", s(&model), "-o", s(&out), "--depth", depth, "--json"]);
+        assert!(run.status.success(), "depth {depth}");
+        let json: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+        let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
+        (
+            json["thin_triangles"].as_u64().expect("thin_triangles"),
+            json["triangles"].as_u64().unwrap_or(0),
+            stderr,
+        )
+    };
+    let (thin, triangles, stderr) = run("5");
+    assert!(50 * thin >= triangles, "{thin} of {triangles} triangles");
+    assert!(
+        stderr.contains("note:") && stderr.contains("finer --depth"),
+        "{stderr}"
+    );
+    let (thin, _, stderr) = run("7");
+    assert_eq!(thin, 0);
+    assert!(!stderr.contains("note:"), "{stderr}");
+    // A smooth solid has none.
+    let json = mesh_ok(
+        &fixtures().join("bench/sphere.rhai"),
+        &out,
+        &["--depth", "6"],
+    );
+    assert_eq!(json["thin_triangles"].as_u64(), Some(0));
+}

@@ -45,7 +45,7 @@ mod tests;
 
 use std::fmt;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 
 use isoforge_field::{Bounds, ClippedField, Shape};
 
@@ -88,6 +88,18 @@ pub struct MeshSettings {
     pub progress: Option<Progress>,
     /// Set from another thread to stop the work ([`MeshError::Cancelled`]).
     pub cancel: Option<Arc<AtomicBool>>,
+    /// Where to count what the mesher noticed on the way, for the caller to tell.
+    pub notes: Option<Arc<MeshNotes>>,
+}
+
+/// What the mesher noticed on the way.
+#[derive(Debug, Default)]
+pub struct MeshNotes {
+    /// Triangles (before the splits onto the surface; counted with a tolerance above 0)
+    /// that join the two sides of a part thinner than about two finest cells: a sheet, a
+    /// needle, a gap the lattice does not resolve, where the mesh may be off by up to
+    /// about a cell. A finer depth resolves them.
+    pub thin_triangles: AtomicU64,
 }
 
 impl fmt::Debug for MeshSettings {
@@ -99,6 +111,7 @@ impl fmt::Debug for MeshSettings {
             .field("threads", &self.threads)
             .field("progress", &self.progress.is_some())
             .field("cancel", &self.cancel.is_some())
+            .field("notes", &self.notes)
             .finish()
     }
 }
@@ -114,6 +127,7 @@ impl MeshSettings {
             threads: 0,
             progress: None,
             cancel: None,
+            notes: None,
         }
     }
 

@@ -301,6 +301,10 @@ pub struct Refiner<'a, S: Sampler> {
     arrived: u64,
     /// The mesher's edges: the vertices opposite them, in the triangles on either side.
     across: IntMap<(u32, u32), Across>,
+    /// The mesher's triangles with an edge from one side of a part to the other (at most
+    /// [`LONG_CELLS`] long, its ends' normals more than 162° apart): there the part is
+    /// thinner than the lattice resolves.
+    pub thin_triangles: u64,
 }
 
 /// What is known about one of the mesher's edges.
@@ -348,6 +352,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             queue: VecDeque::new(),
             arrived: 0,
             across: IntMap::default(),
+            thin_triangles: 0,
         }
     }
 
@@ -370,6 +375,9 @@ impl<'a, S: Sampler> Refiner<'a, S> {
 
         let mut missing = 0u8;
         let mut ready = Vec::new();
+        if (0..3).any(|k| self.across_a_part(t[k], t[(k + 1) % 3])) {
+            self.thin_triangles += 1;
+        }
         for k in 0..3 {
             let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
             // An edge whose ends' normals say its chord holds is never split: neither side
@@ -434,6 +442,14 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             self.queue.retain(|s| held.contains_key(s));
         }
         Ok(())
+    }
+
+    /// Whether edge `a`–`b` runs from one side of a part to the other: short, its ends'
+    /// normals nearly opposite.
+    fn across_a_part(&self, a: u32, b: u32) -> bool {
+        let (va, vb) = (self.verts[a as usize], self.verts[b as usize]);
+        (va.at() - vb.at()).length() <= LONG_CELLS * self.cell
+            && va.normal().dot(vb.normal()) < OPPOSITE_COS
     }
 
     /// Records the vertices opposite a new edge of the pieces (`apex`, and the other side's
@@ -609,8 +625,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             Some((f, _, d)) if d > self.tolerance * SPLIT_SHARE => -f.signum(),
             _ => return Ok(None),
         };
-        let across_a_sheet =
-            len <= LONG_CELLS * self.cell && va.normal().dot(vb.normal()) < OPPOSITE_COS;
+        let across_a_sheet = self.across_a_part(key.0, key.1);
         let reach = len * MID_REACH;
         let along = self.onto_surface(mid, reach);
         // Where tangent planes meet: the ends' (a crease between them), and, when one end

@@ -60,7 +60,13 @@ pub fn run<S: Sampler>(
     let mut decimator = Decimator::new(sampler, tolerance, settings.cell(), &mut refiner);
     contour_into(sampler, settings, merging, block_shift, &mut decimator)?;
     decimator.finish().map_err(MeshError::Write)?;
-    refiner.finish().map_err(MeshError::Write)
+    refiner.finish().map_err(MeshError::Write)?;
+    if let Some(notes) = &settings.notes {
+        notes
+            .thin_triangles
+            .fetch_add(refiner.thin_triangles, Ordering::Relaxed);
+    }
+    Ok(())
 }
 
 /// The octree, the leaves and their polygons, into a sink.
