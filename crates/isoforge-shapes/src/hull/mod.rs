@@ -109,7 +109,7 @@ pub struct HullField {
     /// The facet nearest the last single point (see `shared_hint`).
     last_facet: AtomicUsize,
     /// A disc around each triangle in its plane (centre, radius).
-    triangle_balls: Vec<(DVec3, f64)>,
+    triangle_discs: Vec<(DVec3, f64)>,
     /// A ball around each plane group's triangles (centre, radius): a group whose ball
     /// is farther than the nearest facet found so far is passed over.
     group_balls: Vec<(DVec3, f64)>,
@@ -182,7 +182,7 @@ impl HullField {
                 })
                 .collect()
         };
-        let triangle_balls = triangles
+        let triangle_discs = triangles
             .iter()
             .map(|(_, corners)| {
                 let centre = (corners[0] + corners[1] + corners[2]) / 3.0;
@@ -195,7 +195,7 @@ impl HullField {
             .collect();
         HullField {
             last_facet: AtomicUsize::new(0),
-            triangle_balls,
+            triangle_discs,
             group_balls,
             core,
             grown,
@@ -285,7 +285,7 @@ impl HullField {
         // Nor nearer than the plane's distance and, across the plane, the way from p's
         // foot to the disc around the triangle (many facets of a curved part lie nearly
         // in one plane, and the plane's distance alone passes them all).
-        let (centre, radius) = self.triangle_balls[k];
+        let (centre, radius) = self.triangle_discs[k];
         let across = ((p - centre).length_squared() - beyond * beyond)
             .max(0.0)
             .sqrt();
