@@ -223,6 +223,46 @@ impl PlaneSet {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        /// Any planes, any origin, any point: the grouped max is the linear one, and
+        /// every plane above a floor is in a group `may_exceed` keeps.
+        #[test]
+        fn grouped_max_is_the_linear_max_for_any_planes(
+            raw in proptest::collection::vec(
+                ([-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64], -5.0..5.0f64), 1..300),
+            origin in [-3.0..3.0f64, -3.0..3.0f64, -3.0..3.0f64],
+            p in [-20.0..20.0f64, -20.0..20.0f64, -20.0..20.0f64],
+            below in 0.0..3.0f64,
+        ) {
+            let planes: Vec<(DVec3, f64)> = raw
+                .iter()
+                .filter_map(|(n, h)| DVec3::from(*n).try_normalize().map(|n| (n, *h)))
+                .collect();
+            prop_assume!(!planes.is_empty());
+            let (set, _) = PlaneSet::new(&planes, DVec3::from(origin));
+            let p = DVec3::from(p);
+            let linear = planes
+                .iter()
+                .map(|(n, h)| n.dot(p) - h)
+                .fold(f64::NEG_INFINITY, f64::max);
+            let (v, i) = set.max(p);
+            prop_assert!((v - linear).abs() <= 1e-12 * (1.0 + linear.abs()), "{v} against {linear}");
+            prop_assert_eq!(set.value(i, p), v);
+            let floor = linear - below;
+            let seen = set.seen_from_origin(p);
+            for (g, members) in set.groups() {
+                if !set.may_exceed(g, &seen, floor) {
+                    for k in members {
+                        prop_assert!(set.value(k, p) <= floor, "plane {} left out", k);
+                    }
+                }
+            }
+        }
+    }
 
     fn set_of(n: usize) -> Vec<(DVec3, f64)> {
         // Planes touching an ellipsoid-ish body off the origin.
