@@ -162,6 +162,14 @@ function showFacts(f) {
   $('fact-closed').textContent = closed ? 'closed, manifold' : `${f.watertight ? 'closed' : 'OPEN'}, ${f.manifold ? 'manifold' : 'NOT manifold'}`;
   $('fact-closed').className = closed ? '' : 'bad';
   $('fact-depth').textContent = `${f.depth} (${(f.seconds * 1000).toFixed(0)} ms)`;
+  // As `isoforge mesh` notes it: 2 % or more of the triangles join the two sides of parts
+  // thinner than about two cells, which this depth does not resolve.
+  const thin = f.thin_triangles || 0;
+  const share = f.triangles > 0 ? thin / f.triangles : 0;
+  $('fact-thin').textContent = share >= 0.02
+    ? `${(100 * share).toFixed(1)} % of the mesh: a finer depth resolves them`
+    : thin > 0 ? `${(100 * share).toFixed(2)} % of the mesh` : 'none';
+  $('fact-thin').className = share >= 0.02 ? 'bad' : '';
 }
 
 function updateFileState() {

@@ -3,10 +3,11 @@
 //! memory). Also the rule that keeps the preview current: the newest edit wins, older jobs
 //! are dropped where they stand.
 
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use isoforge_mesh::{Mesh, MeshSettings, check};
+use isoforge_mesh::{Mesh, MeshNotes, MeshSettings, check};
 use serde::Serialize;
 
 use crate::model::Loaded;
@@ -34,6 +35,10 @@ pub struct Facts {
     pub manifold: bool,
     /// The depth meshed at.
     pub depth: u8,
+    /// Triangles joining the two sides of a part thinner than about two cells at this
+    /// depth (as `isoforge mesh --json` counts them): the page says a finer depth is
+    /// needed when they are many.
+    pub thin_triangles: u64,
     /// Seconds spent meshing.
     pub seconds: f64,
 }
@@ -41,8 +46,10 @@ pub struct Facts {
 /// Meshes a loaded model at `depth` (2^depth cells along the region's longest side).
 pub fn mesh(model: &Loaded, depth: u8) -> Result<(Mesh, Facts), isoforge_mesh::MeshError> {
     let started = Instant::now();
-    let mesh =
-        isoforge_mesh::try_mesh_shape(&model.shape, &MeshSettings::new(model.bounds, depth))?;
+    let mut settings = MeshSettings::new(model.bounds, depth);
+    let notes = Arc::new(MeshNotes::default());
+    settings.notes = Some(notes.clone());
+    let mesh = isoforge_mesh::try_mesh_shape(&model.shape, &settings)?;
     let seconds = started.elapsed().as_secs_f64();
     let report = check(&mesh);
     let facts = Facts {
@@ -54,6 +61,7 @@ pub fn mesh(model: &Loaded, depth: u8) -> Result<(Mesh, Facts), isoforge_mesh::M
         watertight: report.watertight,
         manifold: report.manifold,
         depth,
+        thin_triangles: notes.thin_triangles.load(Ordering::Relaxed),
         seconds,
     };
     Ok((mesh, facts))
@@ -127,6 +135,21 @@ mod tests {
         let nt = u32::from_le_bytes(bytes[at + 4..at + 8].try_into().unwrap()) as usize;
         assert_eq!((nv, nt), (mesh.vertices.len(), mesh.triangles.len()));
         assert_eq!(bytes.len(), at + 8 + nv * 12 + nt * 12);
+    }
+
+    #[test]
+    fn thin_parts_are_counted_for_the_page() {
+        // A gyroid sheet a third of a cell thick at depth 5, resolved at depth 7.
+        let text = "bounds([-10, -10, -10], [10, 10, 10]);\n\
+                    intersection(gyroid(8, 0.22), sphere(3))";
+        let model = crate::model::load(Path::new("thin.rhai"), text, &[]).unwrap();
+        let (_, coarse) = mesh(&model, 5).unwrap();
+        assert!(
+            50 * coarse.thin_triangles >= coarse.triangles as u64,
+            "{coarse:?}"
+        );
+        let (_, fine) = mesh(&model, 7).unwrap();
+        assert_eq!(fine.thin_triangles, 0, "{fine:?}");
     }
 
     #[test]

@@ -87,6 +87,11 @@ fn the_page_shows_a_classic_model() {
             .js("return document.getElementById('fact-closed').textContent")
             .await;
         assert_eq!(closed, "closed, manifold");
+        // The heart has no part thinner than the cells at either depth.
+        let thin = b
+            .js("return document.getElementById('fact-thin').textContent")
+            .await;
+        assert_eq!(thin, "none");
         // The README's picture is made here, with the layer view open beside the model.
         if let Some(out) = std::env::var_os("ISOFORGE_STUDIO_SCREENSHOT") {
             b.client
