@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use divan::Bencher;
 use isoforge_mesh::{MeshSettings, mesh_shape};
-use isoforge_script::load_file;
+use isoforge_script::{Model, load_file};
 
 fn main() {
     divan::main();
@@ -31,8 +31,13 @@ fn bench_model(bencher: Bencher, name: &str, depth: u8) {
         Ok(m) => m,
         Err(e) => panic!("{name}: {e}"),
     };
+    bench_loaded(bencher, name, &model, depth);
+}
+
+/// Times meshing a loaded model over the region its script declares.
+fn bench_loaded(bencher: Bencher, name: &str, model: &Model, depth: u8) {
     let Some(bounds) = model.bounds else {
-        panic!("{name}: the fixture declares its bounds")
+        panic!("{name}: the script declares its bounds")
     };
     let settings = MeshSettings::new(bounds, depth);
     bencher.bench(|| {
@@ -61,12 +66,5 @@ fn sampled_hull(bencher: Bencher, depth: u8) {
     let model =
         isoforge_script::load_script(std::path::Path::new("sampled_hull.rhai"), SAMPLED_HULL, &[])
             .unwrap_or_else(|e| panic!("sampled_hull: {e}"));
-    let Some(bounds) = model.bounds else {
-        panic!("sampled_hull: the script declares its bounds")
-    };
-    let settings = MeshSettings::new(bounds, depth);
-    bencher.bench(|| {
-        let mesh = mesh_shape(&model.shape, &settings);
-        divan::black_box(mesh.triangles.len())
-    });
+    bench_loaded(bencher, "sampled_hull", &model, depth);
 }

@@ -57,6 +57,19 @@ fn check_against(mesh: &Path, model: &Path) -> serde_json::Value {
     serde_json::from_slice(&run.stdout).expect("--json prints one JSON object")
 }
 
+/// A gyroid sheet 0.22 mm thick in a ball of 3, written into `dir`: a third of a cell at
+/// depth 5 over its 20 mm region, resolved at depth 7.
+fn thin_gyroid(dir: &Path) -> PathBuf {
+    let model = dir.join("thin_gyroid.rhai");
+    std::fs::write(
+        &model,
+        "bounds([-10, -10, -10], [10, 10, 10]);\n\
+         intersection(gyroid(8, 0.22), sphere(3))\n",
+    )
+    .expect("write the model");
+    model
+}
+
 pub(crate) fn models(dir: &str) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(fixtures().join(dir))
         .expect("fixtures folder")
@@ -400,13 +413,7 @@ fn a_sheet_thinner_than_a_cell_takes_not_many_more_triangles_than_the_uniform_me
     // tolerance for the uniform mesh's 708, its largest distance no better (0.110 and
     // 0.109 mm).
     let dir = tempfile::tempdir().expect("tempdir");
-    let model = dir.path().join("thin_gyroid.rhai");
-    std::fs::write(
-        &model,
-        "bounds([-10, -10, -10], [10, 10, 10]);\n\
-         intersection(gyroid(8, 0.22), sphere(3))\n",
-    )
-    .expect("write the model");
+    let model = thin_gyroid(dir.path());
     let out = dir.path().join("out.stl");
     let measured = |extra: &[&str]| {
         let mut args = vec!["--depth", "5"];
@@ -484,13 +491,7 @@ fn a_model_thinner_than_the_lattice_gets_a_note() {
     // that join its two sides are counted, and when they are many the user is told why the
     // mesh may be off and what to do.
     let dir = tempfile::tempdir().expect("tempdir");
-    let model = dir.path().join("thin_gyroid.rhai");
-    std::fs::write(
-        &model,
-        "bounds([-10, -10, -10], [10, 10, 10]);\n\
-         intersection(gyroid(8, 0.22), sphere(3))\n",
-    )
-    .expect("write the model");
+    let model = thin_gyroid(dir.path());
     let out = dir.path().join("out.stl");
     let run = |depth: &str| {
         let run = isoforge(&["mesh", s(&model), "-o", s(&out), "--depth", depth, "--json"]);
