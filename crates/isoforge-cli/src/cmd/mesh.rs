@@ -152,7 +152,46 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
     if let Some(sweep) = args.model.sweep()? {
         return steps::run(&args, &sweep, format, &output, global);
     }
+    let (code, _) = mesh_one(args, format, output, global, start)?;
+    Ok(code)
+}
 
+/// What one mesh run noticed, for a caller that reports it (`steps.rs`).
+pub(super) struct Made {
+    /// Triangles joining the two sides of parts thinner than the lattice resolves.
+    pub thin_triangles: u64,
+    /// Triangles written.
+    pub triangles: u64,
+    /// The finest cell's side.
+    pub cell: f64,
+}
+
+impl Made {
+    /// The note on parts thinner than the lattice, when they are enough of the mesh to
+    /// tell ([`THIN_NOTE_SHARE`]).
+    pub fn thin_note(&self) -> Option<String> {
+        (self.triangles > 0 && self.thin_triangles * THIN_NOTE_SHARE >= self.triangles).then(|| {
+            format!(
+                "{} triangles ({:.1} % of the mesh) join the two sides of parts thinner than \
+                 about two cells ({:.3} mm): sheets, needles or gaps the lattice does not \
+                 resolve, where the mesh may be off by up to a cell; a finer --depth \
+                 resolves them",
+                self.thin_triangles,
+                100.0 * self.thin_triangles as f64 / self.triangles as f64,
+                2.0 * self.cell
+            )
+        })
+    }
+}
+
+/// Meshes the model as `args` say (one parameter value) into `output`, and reports it.
+pub(super) fn mesh_one(
+    args: MeshArgs,
+    format: MeshFormat,
+    output: PathBuf,
+    global: &Global,
+    start: Instant,
+) -> Result<(ExitCode, Made)> {
     let loaded = args.model.load()?;
     let bounds = loaded.bounds;
     let depth = match (args.depth, args.resolution) {
@@ -160,10 +199,10 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
         (None, Some(r)) => match depth_for(bounds.longest_side(), r) {
             Some(d) => d,
             None => {
-                return usage(format!(
+                return Err(crate::common::usage(format!(
                     "--resolution {r}: too fine for a region {} mm long (at most 2^{MAX_DEPTH} cells)",
                     bounds.longest_side()
-                ));
+                )));
             }
         },
         (None, None) => DEFAULT_DEPTH,
@@ -262,15 +301,15 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
             seconds
         );
     }
-    if thin_triangles * THIN_NOTE_SHARE >= report.tally.triangles && !global.quiet {
-        eprintln!(
-            "note: {thin_triangles} triangles ({:.1} % of the mesh) join the two sides of \
-             parts thinner than about two cells ({:.3} mm): sheets, needles or gaps the \
-             lattice does not resolve, where the mesh may be off by up to a cell; a finer \
-             --depth resolves them",
-            100.0 * thin_triangles as f64 / report.tally.triangles as f64,
-            2.0 * settings.cell()
-        );
+    let made = Made {
+        thin_triangles,
+        triangles: report.tally.triangles,
+        cell: settings.cell(),
+    };
+    if let Some(note) = made.thin_note()
+        && !global.quiet
+    {
+        eprintln!("note: {note}");
     }
     if !report.is_closed_manifold() {
         eprintln!(
@@ -278,9 +317,9 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
              manifold: {}); please report this as a bug with the model",
             report.open_vertices, report.watertight, report.manifold
         );
-        return Ok(ExitCode::from(1));
+        return Ok((ExitCode::from(1), made));
     }
-    Ok(ExitCode::SUCCESS)
+    Ok((ExitCode::SUCCESS, made))
 }
 
 #[cfg(test)]

@@ -63,8 +63,9 @@ fn thin_gyroid(dir: &Path) -> PathBuf {
     let model = dir.join("thin_gyroid.rhai");
     std::fs::write(
         &model,
-        "bounds([-10, -10, -10], [10, 10, 10]);\n\
-         intersection(gyroid(8, 0.22), sphere(3))\n",
+        "let t = param(\"t\", 0.22, 0.1, 6.0);\n\
+         bounds([-10, -10, -10], [10, 10, 10]);\n\
+         intersection(gyroid(8, t), sphere(3))\n",
     )
     .expect("write the model");
     model
@@ -520,4 +521,46 @@ fn a_model_thinner_than_the_lattice_gets_a_note() {
         &["--depth", "6"],
     );
     assert_eq!(json["thin_triangles"].as_u64(), Some(0));
+}
+
+#[test]
+fn each_step_of_a_sweep_gets_its_own_thin_note() {
+    // The gyroid's sheet at 0.22 mm is a third of a cell at depth 5; at 6 mm the sheet
+    // fills the ball.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = thin_gyroid(dir.path());
+    let out = dir.path().join("g.stl");
+    let args = [
+        "mesh",
+        s(&model),
+        "-o",
+        s(&out),
+        "--depth",
+        "5",
+        "--param",
+        "t=0.22..6:2",
+        "--json",
+    ];
+    let run = isoforge(&args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+    let thin: Vec<u64> = json["steps"]
+        .as_array()
+        .expect("steps")
+        .iter()
+        .map(|step| step["thin_triangles"].as_u64().expect("thin_triangles"))
+        .collect();
+    assert_eq!(thin.len(), 2);
+    assert!(thin[0] > 0 && thin[1] == 0, "{thin:?}");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    let notes: Vec<&str> = stderr.lines().filter(|l| l.starts_with("note:")).collect();
+    assert_eq!(notes.len(), 1, "{stderr}");
+    assert!(
+        notes[0].contains("g-000.stl") && notes[0].contains("finer --depth"),
+        "{stderr}"
+    );
 }

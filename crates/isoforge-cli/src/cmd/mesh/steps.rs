@@ -1,6 +1,7 @@
 //! `isoforge mesh --param t=0..1:N`: one mesh per step of a parameter range, `NAME-000.stl`
 //! upward. Each step is an ordinary `isoforge mesh` run with the parameter fixed; its file is
-//! then read back and checked, so the report is of what is on disk.
+//! then read back and checked, so the report is of what is on disk. A step whose mesh has
+//! parts thinner than the lattice gets the same note a single run does.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -55,7 +56,8 @@ pub fn run(
         step_args.output = Some(path.clone());
         step_args.format = Some(format.name().to_string());
         // Exit 1 (a mesh not closed) is seen again in the check below.
-        super::run(step_args, &quiet).with_context(step)?;
+        let (_, made) = super::mesh_one(step_args, format, path.clone(), &quiet, Instant::now())
+            .with_context(step)?;
         let mesh = read_mesh(path).with_context(step)?;
         let report = check(&mesh);
         if !report.is_closed_manifold() {
@@ -75,8 +77,15 @@ pub fn run(
                 report.volume
             );
         }
+        // Each step's own note: a sweep can thin a part below the lattice at some values.
+        if let Some(note) = made.thin_note()
+            && !global.quiet
+        {
+            eprintln!("note: {}: {note}", path.display());
+        }
         let mut j = crate::cmd::check::report_json(&path.display().to_string(), &report);
         j["value"] = json!(value);
+        j["thin_triangles"] = json!(made.thin_triangles);
         steps.push(j);
     }
     if global.json {
