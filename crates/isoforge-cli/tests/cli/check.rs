@@ -303,6 +303,19 @@ fn a_threaded_rod_s_tooth_tips_hold_their_tolerance() {
     meshes_within_its_tolerance("sweeps/threaded_rod.rhai", &dir.path().join("rod.stl"));
 }
 
+/// The boat's bow ends in a flat cap in the plane x = 0. A mesher's vertex in that plane,
+/// 0.3 of a cell outside the cap's rim, was left there (3.03 tolerances off): its way onto
+/// the cap runs along the cap's plane, and the check that the solid is thick beyond where
+/// it lands probed along that way, in the plane, where the field reads the cap's own zero.
+/// Checked by ADMesh too.
+#[test]
+fn a_boat_hull_s_bow_holds_its_tolerance() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("boat.stl");
+    meshes_within_its_tolerance("sweeps/boat_hull.rhai", &out);
+    crate::sweeps::admesh_finds_nothing_to_fix(&out, "boat_hull");
+}
+
 /// Meshes a fixture at the default depth and tolerance into `out`, and asserts that
 /// `check --against` finds the tolerance held.
 fn meshes_within_its_tolerance(fixture: &str, out: &Path) {

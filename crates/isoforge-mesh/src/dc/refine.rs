@@ -575,15 +575,20 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         (d <= self.tolerance * 0.1).then_some((q, n))
     }
 
-    /// Whether the sides of the surface on either end of a move from `p` to `q` go on for
-    /// [`THICK_CELLS`]: beyond `q`, and behind `p`. A vertex moved far onto a ball or a
-    /// wall thinner than that, or out of one, may land on its far side.
-    /// `fp` is the field at `p`, already probed by the caller.
-    fn thick_around(&mut self, p: DVec3, fp: f64, q: DVec3) -> bool {
+    /// Whether the sides of the surface on either end of a move from `p` to `q` (with its
+    /// normal `nq`) go on for [`THICK_CELLS`]: beyond `q` along its normal, and behind `p`
+    /// along the move. A vertex moved far onto a ball or a wall thinner than that, or out
+    /// of one, may land on its far side. `fp` is the field at `p`, already probed by the
+    /// caller.
+    fn thick_around(&mut self, p: DVec3, fp: f64, (q, nq): (DVec3, DVec3)) -> bool {
         let dir = (q - p).normalize_or_zero();
+        // Beyond `q` along its normal, to the other side: a move along a face's plane (a
+        // vertex in the plane of a cap, outside its rim) probed along itself reads the
+        // face's own zero.
+        let across = -nq * fp.signum();
         [0.5, 1.0].iter().all(|&k| {
             let step = dir * (k * THICK_CELLS * self.cell);
-            let beyond = self.probe(q + step);
+            let beyond = self.probe(q + across * (k * THICK_CELLS * self.cell));
             let behind = self.probe(p - step);
             beyond.is_some_and(|(f, _, _)| f.signum() != fp.signum())
                 && behind.is_some_and(|(f, _, _)| f.signum() == fp.signum())
@@ -1120,9 +1125,9 @@ impl<S: Sampler> MeshSink for Refiner<'_, S> {
         let (pos, normal) = match self.probe(at) {
             Some((f, n, d)) if d > self.tolerance * MOVE_SHARE => {
                 let mut far = false;
-                let moved = self.onto_surface(at, REACH * self.cell).filter(|&(q, _)| {
+                let moved = self.onto_surface(at, REACH * self.cell).filter(|&(q, nq)| {
                     far = (q - at).length() > FAR_MOVE * self.cell;
-                    !far || self.thick_around(at, f, q)
+                    !far || self.thick_around(at, f, (q, nq))
                 });
                 stray = moved.is_none() && d > STRAY_CELLS * self.cell;
                 stuck = moved.is_none() || far;
