@@ -288,10 +288,7 @@ fn with_a_depth_misses_where_the_model_is_narrower_than_two_cells_are_counted_ap
 fn a_drilled_block_holds_its_tolerance_and_admesh_finds_nothing_to_fix() {
     // cube_holes at the default depth: a chord of the merge's once crossed its 5 mm hole
     // 0.22 mm inside the rim (26 tolerances), over a flap folded back under it.
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("cube_holes.stl");
-    meshes_within_its_tolerance("slice/cube_holes.rhai", &out);
-    crate::sweeps::admesh_finds_nothing_to_fix(&out, "cube_holes");
+    holds_its_tolerance_and_admesh_finds_nothing_to_fix("slice/cube_holes.rhai");
 }
 
 /// The rod's tooth tips, two cells wide: the mesher's vertices there sat up to 0.3 of a
@@ -310,10 +307,15 @@ fn a_threaded_rod_s_tooth_tips_hold_their_tolerance() {
 /// Checked by ADMesh too.
 #[test]
 fn a_boat_hull_s_bow_holds_its_tolerance() {
+    holds_its_tolerance_and_admesh_finds_nothing_to_fix("sweeps/boat_hull.rhai");
+}
+
+/// [`meshes_within_its_tolerance`], then ADMesh on the same file.
+fn holds_its_tolerance_and_admesh_finds_nothing_to_fix(fixture: &str) {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("boat.stl");
-    meshes_within_its_tolerance("sweeps/boat_hull.rhai", &out);
-    crate::sweeps::admesh_finds_nothing_to_fix(&out, "boat_hull");
+    let out = dir.path().join("out.stl");
+    meshes_within_its_tolerance(fixture, &out);
+    crate::sweeps::admesh_finds_nothing_to_fix(&out, fixture);
 }
 
 /// Meshes a fixture at the default depth and tolerance into `out`, and asserts that
