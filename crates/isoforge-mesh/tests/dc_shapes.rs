@@ -901,3 +901,25 @@ fn a_ball_a_cell_wide_stays_outward_at_a_large_tolerance() {
     let ball = ([0.0, -0.5, 0.0], 0.171_074_936_092_517_4);
     ball_stays_outward(ball, (lo, hi), 3, Some(3.0), "ball a cell wide, 3 cells");
 }
+
+/// The sixth blob the hunts found (session 34): a ball 1.3 cells wide holding one lattice
+/// corner by 0.003, at a tolerance of 3 cells. The merge leaves a crumpled blob; the
+/// refiner moved three of its vertices onto the ball, one of them 0.6 of a cell, and
+/// turned it over (volume -0.00025, the ball's 0.029).
+#[test]
+fn a_ball_holding_one_corner_stays_outward_at_a_large_tolerance() {
+    let lo = [
+        -1.078_539_274_558_991,
+        -1.062_396_520_040_577,
+        -1.275_366_192_526_039_3,
+    ];
+    let hi = [1.244_777_736_262_466, 0.8, 0.8];
+    let ball = ([0.0, 0.0, -0.25], 0.190_862_559_571_927_88);
+    ball_stays_outward(
+        ball,
+        (lo, hi),
+        3,
+        Some(3.0),
+        "ball holding one corner, 3 cells",
+    );
+}

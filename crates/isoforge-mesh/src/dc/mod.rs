@@ -20,7 +20,9 @@
 //! 6. `decimate.rs`: with a tolerance, edge collapses checked against the field (on
 //!    chunks of 65,536 triangles, for as long as collapsing pays);
 //! 7. `refine.rs`: with a tolerance, vertices off the surface moved onto it and triangles
-//!    that cut a crease split along it, then the [`MeshSink`].
+//!    that cut a crease split along it;
+//! 8. `shells.rs`: with a tolerance, a small closed part that came out inside out turned
+//!    the right way out, then the [`MeshSink`].
 //!
 //! Everything samples the field clipped to the region (`isoforge_field::ClippedField`:
 //! F = max(f, d_box), NaN = outside), so models cut by their region come out capped.
@@ -37,6 +39,7 @@ pub mod octree;
 pub mod qef;
 pub mod refine;
 pub mod sampler;
+pub mod shells;
 pub mod stream;
 pub mod topology;
 

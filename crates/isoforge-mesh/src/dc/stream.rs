@@ -22,6 +22,7 @@ use super::merge::{AboveBlocks, Resolved};
 use super::octree::{Class, Grid, Octree};
 use super::refine::Refiner;
 use super::sampler::{EvalPool, Sampler};
+use super::shells::SmallShells;
 use super::{MeshError, MeshSettings, Reporter};
 use crate::sink::MeshSink;
 
@@ -56,7 +57,14 @@ pub fn run<S: Sampler>(
     let tolerance = settings
         .effective_tolerance()
         .min(settings.cell() * decimate::MAX_CELLS);
-    let mut refiner = Refiner::new(sampler, tolerance, &settings.bounds, settings.cell(), sink);
+    let mut shells = SmallShells::new(sampler, settings.cell(), sink);
+    let mut refiner = Refiner::new(
+        sampler,
+        tolerance,
+        &settings.bounds,
+        settings.cell(),
+        &mut shells,
+    );
     let mut decimator = Decimator::new(sampler, tolerance, settings.cell(), &mut refiner);
     contour_into(sampler, settings, merging, block_shift, &mut decimator)?;
     decimator.finish().map_err(MeshError::Write)?;
@@ -66,6 +74,7 @@ pub fn run<S: Sampler>(
             .thin_triangles
             .fetch_add(refiner.thin_triangles, Ordering::Relaxed);
     }
+    shells.finish().map_err(MeshError::Write)?;
     Ok(())
 }
 
