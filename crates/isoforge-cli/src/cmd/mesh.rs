@@ -288,6 +288,7 @@ pub(super) fn mesh_one(
                 "bytes": estimate.bytes,
             },
             "thin_triangles": thin_triangles,
+            "parts_turned": notes.parts_turned.load(Ordering::Relaxed),
             "seconds": seconds,
         }));
     } else if !global.quiet {

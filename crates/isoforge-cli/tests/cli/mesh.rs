@@ -524,6 +524,33 @@ fn a_model_thinner_than_the_lattice_gets_a_note() {
 }
 
 #[test]
+fn a_blob_that_came_out_inside_out_is_turned_and_counted() {
+    // A ball 1.3 cells wide holding one lattice corner, at a tolerance of 3 cells (the
+    // hunts' sixth inside-out blob): the mesher's blob came out inside out, and is written
+    // the right way out; ADMesh finds nothing to turn.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = dir.path().join("blob.rhai");
+    std::fs::write(
+        &model,
+        "sqrt(x*x + y*y + (z + 0.25)*(z + 0.25)) - 0.19086255957192788\n",
+    )
+    .expect("write the model");
+    let out = dir.path().join("blob.stl");
+    let region = "--bounds=-1.078539274558991,-1.062396520040577,-1.2753661925260393,\
+                  1.244777736262466,0.8,0.8";
+    let json = mesh_ok(
+        &model,
+        &out,
+        &[region, "--depth", "3", "--tolerance", "0.871"],
+    );
+    assert_eq!(json["parts_turned"].as_u64(), Some(1), "{json}");
+    crate::sweeps::admesh_finds_nothing_to_fix(&out, "blob");
+    // The same ball at depth 6 is meshed the right way out to begin with.
+    let json = mesh_ok(&model, &out, &[region, "--depth", "6"]);
+    assert_eq!(json["parts_turned"].as_u64(), Some(0), "{json}");
+}
+
+#[test]
 fn each_step_of_a_sweep_gets_its_own_thin_note() {
     // The gyroid's sheet at 0.22 mm is a third of a cell at depth 5; at 6 mm the sheet
     // fills the ball.

@@ -103,6 +103,9 @@ pub struct MeshNotes {
     /// needle, a gap the lattice does not resolve, where the mesh may be off by up to
     /// about a cell. A finer depth resolves them.
     pub thin_triangles: AtomicU64,
+    /// Small closed parts (a blob a cell or two wide, at a large tolerance) that came out
+    /// inside out and were turned the right way out (`shells.rs`).
+    pub parts_turned: AtomicU64,
 }
 
 impl fmt::Debug for MeshSettings {

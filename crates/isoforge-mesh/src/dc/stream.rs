@@ -75,6 +75,11 @@ pub fn run<S: Sampler>(
             .fetch_add(refiner.thin_triangles, Ordering::Relaxed);
     }
     shells.finish().map_err(MeshError::Write)?;
+    if let Some(notes) = &settings.notes {
+        notes
+            .parts_turned
+            .fetch_add(shells.turned, Ordering::Relaxed);
+    }
     Ok(())
 }
 
