@@ -176,15 +176,21 @@ impl<'a, S: Sampler> SmallShells<'a, S> {
         self.write_part(id, turn)
     }
 
-    /// The held part `t` belongs to: the parts its vertices are in, joined into the
-    /// largest, or a new one.
-    fn part_for(&mut self, t: [u32; 3]) -> u32 {
+    /// The held parts `t`'s vertices are in, in a fixed order.
+    fn held_parts(&self, t: [u32; 3]) -> Vec<u32> {
         let mut ids: Vec<u32> = t
             .iter()
             .filter_map(|v| self.owner.get(v).copied())
             .collect();
         ids.sort_unstable();
         ids.dedup();
+        ids
+    }
+
+    /// The held part `t` belongs to: the parts its vertices are in, joined into the
+    /// largest, or a new one.
+    fn part_for(&mut self, t: [u32; 3]) -> u32 {
+        let ids = self.held_parts(t);
         let Some(&keep) = ids
             .iter()
             .max_by_key(|&&id| (self.parts.get(&id).map_or(0, |p| p.triangles.len()), id))
@@ -229,13 +235,7 @@ impl<S: Sampler> MeshSink for SmallShells<'_, S> {
         // Part of a large part (or of a small one that joins it): written now, with the
         // held triangles it joins.
         if t.iter().any(|&v| self.is_written(v)) {
-            let mut ids: Vec<u32> = t
-                .iter()
-                .filter_map(|v| self.owner.get(v).copied())
-                .collect();
-            ids.sort_unstable();
-            ids.dedup();
-            for id in ids {
+            for id in self.held_parts(t) {
                 self.write_part(id, false)?;
             }
             for v in t {
