@@ -112,13 +112,47 @@ impl CustomField for FirstOrderDistance {
         })
     }
 
-    /// Central differences of the estimate: its exact gradient would need f's second
-    /// derivatives, and this is asked only where normals are wanted (at the surface).
+    /// The estimate's gradient, `∇f/|∇f| − f·H∇f/|∇f|³` (H the Hessian of f). `H∇f` is
+    /// one central difference of ∇f along the gradient's direction: three evaluations of
+    /// f's tape in gradient mode, where central differences of the estimate itself took
+    /// seven. The late meshing stages ask for a gradient at every point they check, so
+    /// on an `offset` of a gyroid this was two thirds of the meshing time.
     fn gradient(&self, p: [f64; 3]) -> [f64; 4] {
-        let v = self.value(p);
-        let scale = p.iter().fold(1.0f64, |m, c| m.max(c.abs()));
-        let h = 1e-6 * scale;
-        let mut g = [v, 0.0, 0.0, 0.0];
+        let (v, g) = with_evals(|e| {
+            let g = e.grad.eval(&self.tape, p);
+            (g.v, g.d)
+        });
+        let n = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        let value = estimate(v, n);
+        if !(n > 0.0 && n.is_finite() && v.is_finite()) || value.abs() >= MAX_DISTANCE {
+            // Saturated (or no slope to go by): the estimate's own differences.
+            return self.differences(p, value);
+        }
+        let u = g.map(|c| c / n);
+        let h = step(p);
+        let along = |s: f64| {
+            with_evals(|e| {
+                e.grad
+                    .eval(&self.tape, [0, 1, 2].map(|k| p[k] + s * u[k]))
+                    .d
+            })
+        };
+        let (ahead, behind) = (along(h), along(-h));
+        let k = v / (n * n);
+        let d = [0, 1, 2].map(|i| u[i] - k * (ahead[i] - behind[i]) / (2.0 * h));
+        if d.iter().all(|c| c.is_finite()) {
+            [value, d[0], d[1], d[2]]
+        } else {
+            self.differences(p, value)
+        }
+    }
+}
+
+impl FirstOrderDistance {
+    /// Central differences of the estimate, `value` being its value at `p`.
+    fn differences(&self, p: [f64; 3], value: f64) -> [f64; 4] {
+        let h = step(p);
+        let mut g = [value, 0.0, 0.0, 0.0];
         for k in 0..3 {
             let (mut a, mut b) = (p, p);
             a[k] += h;
@@ -127,6 +161,11 @@ impl CustomField for FirstOrderDistance {
         }
         g
     }
+}
+
+/// The difference step at `p`: a millionth of its largest coordinate (or of 1).
+fn step(p: [f64; 3]) -> f64 {
+    1e-6 * p.iter().fold(1.0f64, |m, c| m.max(c.abs()))
 }
 
 /// The first-order distance `f / |∇f|` of `s` (see the module doc).

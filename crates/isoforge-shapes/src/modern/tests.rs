@@ -232,6 +232,35 @@ fn heart() -> Shape {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(300))]
 
+    /// The estimate's gradient (from ∇f and one difference of it along the gradient's
+    /// direction) is the derivative of its values: central differences of them agree,
+    /// for a field far from a distance (the classic heart) and its offset.
+    #[test]
+    fn first_order_distance_gradient_is_the_values_derivative(
+        p in [-1.5..1.5f64, -1.5..1.5f64, -1.5..1.5f64],
+    ) {
+        for s in [first_order_distance(&heart()), offset(&heart(), 0.2).unwrap()] {
+            let tape = Tape::new(&s);
+            let g = GradEval::new().eval(&tape, p);
+            let mut pe = PointEval::new();
+            let v = pe.eval(&tape, p);
+            prop_assert_eq!(g.v, v);
+            // Deep inside the slope all but vanishes and the estimate saturates.
+            prop_assume!(v.abs() < 10.0);
+            let h = 1e-5;
+            for k in 0..3 {
+                let (mut a, mut b) = (p, p);
+                a[k] += h;
+                b[k] -= h;
+                let fd = (pe.eval(&tape, a) - pe.eval(&tape, b)) / (2.0 * h);
+                prop_assert!(
+                    (g.d[k] - fd).abs() <= 1e-4 * (1.0 + fd.abs()),
+                    "d{} {} against {} at {:?}", k, g.d[k], fd, p
+                );
+            }
+        }
+    }
+
     /// The estimate's enclosure over a box holds every point value in it, for a field
     /// that is far from a distance (the classic heart) and its offsets and shells.
     #[test]
