@@ -1,7 +1,8 @@
 //! Meshing time for the modern-library fixtures (`fixtures/modern`: hull, metaballs,
 //! function volumes, an imported mesh, a shell) at depths 8 and 9, to read beside the
 //! classic benchmark models of `mesh.rs` (same settings: all cores, the script's bounds).
-//! Quick subset: `cargo bench --bench modern -- d8`.
+//! Quick subset: `cargo bench --bench modern -- d8`. `sampled_hull` and
+//! `offset_of_gyroids` time two slow fields (a sampled hull, a first-order distance).
 
 use std::path::PathBuf;
 
@@ -67,4 +68,25 @@ fn sampled_hull(bencher: Bencher, depth: u8) {
         isoforge_script::load_script(std::path::Path::new("sampled_hull.rhai"), SAMPLED_HULL, &[])
             .unwrap_or_else(|e| panic!("sampled_hull: {e}"));
     bench_loaded(bencher, "sampled_hull", &model, depth);
+}
+
+/// An `offset` of two gyroids in balls, turned (the fuzz run's slowest model, session
+/// 36): neither is a distance, so the offset meshes their first-order distance
+/// f / |∇f|, and the late stages ask for its gradient at every point they check.
+const OFFSET_OF_GYROIDS: &str = "bounds([-3, -3, -3], [3, 3, 3]);
+offset(intersection(difference(sphere(0.903), intersection(gyroid(1.374, 0.185),
+sphere(1.161)).move([-0.457, 0.646, -0.022])), smooth_difference(intersection(gyroid(2.997,
+0.274), sphere(0.509)).scale([0.544, 0.599, 0.541]), sphere(0.353), 0.307)).rotate([0.106,
+-0.812, 0.537], 86.363), 0.248)
+";
+
+#[divan::bench(args = [6, 7], sample_count = 3, sample_size = 1)]
+fn offset_of_gyroids(bencher: Bencher, depth: u8) {
+    let model = isoforge_script::load_script(
+        std::path::Path::new("offset_of_gyroids.rhai"),
+        OFFSET_OF_GYROIDS,
+        &[],
+    )
+    .unwrap_or_else(|e| panic!("offset_of_gyroids: {e}"));
+    bench_loaded(bencher, "offset_of_gyroids", &model, depth);
 }
