@@ -164,11 +164,11 @@ impl ClippedField {
         clip_grad(&self.bounds, ev.eval(&self.tape, p), p)
     }
 
-    /// The field with its tape simplified by the choices of `ev`'s last
+    /// The field with its tape narrowed ([`Tape::narrow`]) by `ev`'s last
     /// [`ClippedField::interval`] call: equal to `self` everywhere in that call's box.
     pub fn narrow(&self, ev: &IntervalEval) -> ClippedField {
         ClippedField {
-            tape: self.tape.simplify(ev.choices()),
+            tape: self.tape.narrow(ev),
             bounds: self.bounds,
         }
     }

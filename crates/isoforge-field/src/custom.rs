@@ -37,4 +37,14 @@ pub trait CustomField: Send + Sync {
         let _ = b;
         [Interval::ENTIRE; 3]
     }
+
+    /// A field equal to this one everywhere in the box `b` and cheaper to evaluate there,
+    /// or `None` when there is nothing to gain (the default). The meshers, the slicer and
+    /// the renderer narrow a tape to each box they split ([`crate::Tape::narrow`]); a node
+    /// that runs a tape of its own (the first-order distance of `offset`) answers with
+    /// that tape narrowed to the box, so its points stop paying for far-off parts.
+    fn narrow(&self, b: [Interval; 3]) -> Option<std::sync::Arc<dyn CustomField>> {
+        let _ = b;
+        None
+    }
 }

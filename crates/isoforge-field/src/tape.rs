@@ -118,7 +118,8 @@ struct TapeData {
     choices: usize,
     /// The register holding the result after the last instruction.
     out: u32,
-    /// Shared by a tape and all its simplifications (indices stay valid).
+    /// Shared by a tape and all its simplifications (indices stay valid); a narrowed tape
+    /// has its own list, with the same indices.
     customs: Arc<[Arc<dyn CustomField>]>,
 }
 
@@ -234,6 +235,10 @@ impl Tape {
     pub fn choice_count(&self) -> usize {
         self.0.choices
     }
+    /// True when the tape holds a custom node (whose own tape may narrow).
+    pub fn has_custom_nodes(&self) -> bool {
+        !self.0.customs.is_empty()
+    }
     /// The number of registers an evaluator needs.
     pub fn register_count(&self) -> usize {
         self.0.regs
@@ -272,6 +277,33 @@ impl Tape {
             // Re-entered from a custom field's callback on this thread: use fresh buffers.
             Err(_) => self.simplify_with(choices, &mut Scratch::default()),
         })
+    }
+
+    /// The tape narrowed to the box of `ev`'s last pass over it: [`Tape::simplify`] by that
+    /// pass's choices, and each custom node it met replaced by what the node's
+    /// [`CustomField::narrow`] gives for its input box there. Equal to `self` everywhere
+    /// in the box; `self` itself (a pointer copy) when nothing narrowed.
+    pub fn narrow(&self, ev: &crate::IntervalEval) -> Tape {
+        let short = self.simplify(ev.choices());
+        let mut narrowed: Option<Vec<Arc<dyn CustomField>>> = None;
+        for &(k, b) in ev.custom_boxes() {
+            let Some(node) = self.0.customs.get(k as usize) else {
+                continue;
+            };
+            if let Some(n) = node.narrow(b) {
+                narrowed.get_or_insert_with(|| self.0.customs.to_vec())[k as usize] = n;
+            }
+        }
+        match narrowed {
+            None => short,
+            Some(customs) => Tape(Arc::new(TapeData {
+                ops: short.0.ops.clone(),
+                regs: short.0.regs,
+                choices: short.0.choices,
+                out: short.0.out,
+                customs: customs.into(),
+            })),
+        }
     }
 
     fn simplify_with(&self, choices: &[Choice], s: &mut Scratch) -> Tape {

@@ -21,6 +21,9 @@ pub struct IntervalEval {
     regs: Vec<Interval>,
     nan: Vec<bool>,
     choices: Vec<Choice>,
+    /// The input box of each custom node the last pass met with bounded, NaN-free
+    /// inputs, by the node's index in the tape (for [`Tape::narrow`]).
+    custom_boxes: Vec<(u32, [Interval; 3])>,
 }
 
 /// An operation on one interval; the common cases inline.
@@ -174,6 +177,7 @@ impl IntervalEval {
             self.nan.resize(n, false);
         }
         self.choices.clear();
+        self.custom_boxes.clear();
         let (r, nr) = (&mut self.regs[..], &mut self.nan[..]);
         for op in tape.ops() {
             let (out, v, nan) = match *op {
@@ -230,6 +234,9 @@ impl IntervalEval {
                     // its own arithmetic can give NaN (inf - inf): count that as possible.
                     let nan =
                         args.iter().any(|&a| nr[a as usize]) || ins.iter().any(|&i| unbounded(i));
+                    if !nan {
+                        self.custom_boxes.push((k, ins));
+                    }
                     let v = tape.customs()[k as usize].interval(ins);
                     if v.is_empty() {
                         (out, Interval::ENTIRE, true)
@@ -255,6 +262,12 @@ impl IntervalEval {
     /// simplifying by no choices keeps the tape whole, which is right anywhere.
     pub(crate) fn forget_choices(&mut self) {
         self.choices.clear();
+        self.custom_boxes.clear();
+    }
+
+    /// The input boxes of the custom nodes of the last `eval` (see [`Tape::narrow`]).
+    pub(crate) fn custom_boxes(&self) -> &[(u32, [Interval; 3])] {
+        &self.custom_boxes
     }
 }
 

@@ -112,6 +112,20 @@ impl CustomField for FirstOrderDistance {
         })
     }
 
+    /// The estimate on f's tape narrowed to the box: inside a ball that holds one of two
+    /// gyroids, say, its points stop paying for the other.
+    fn narrow(&self, b: [Interval; 3]) -> Option<Arc<dyn CustomField>> {
+        if self.tape.choice_count() == 0 && !self.tape.has_custom_nodes() {
+            return None; // one expression (the classic heart): nothing to leave out
+        }
+        let tape = with_evals(|e| {
+            e.interval.eval(&self.tape, b);
+            self.tape.narrow(&e.interval)
+        });
+        (!tape.ptr_eq(&self.tape))
+            .then(|| Arc::new(FirstOrderDistance { tape }) as Arc<dyn CustomField>)
+    }
+
     /// The estimate's gradient, `∇f/|∇f| − f·H∇f/|∇f|³` (H the Hessian of f). `H∇f` is
     /// one central difference of ∇f along the gradient's direction: three evaluations of
     /// f's tape in gradient mode, where central differences of the estimate itself took

@@ -283,3 +283,57 @@ proptest! {
         }
     }
 }
+
+/// Two hearts far apart: the estimate of their union, narrowed to a box around one,
+/// leaves the other out and gives the same values and gradients there; over a box that
+/// holds both nothing narrows.
+#[test]
+fn narrowing_the_first_order_distance_leaves_out_the_far_part() {
+    use isoforge_field::CustomField;
+    let two = union(&heart(), &move_by(&heart(), [6.0, 0.0, 0.0]).unwrap());
+    let whole = FirstOrderDistance::new(&two);
+    let iv = |lo: f64, hi: f64| Interval::try_from((lo, hi)).unwrap();
+    assert!(
+        whole
+            .narrow([iv(-2.0, 8.0), iv(-2.0, 2.0), iv(-2.0, 2.0)])
+            .is_none()
+    );
+    let near = whole
+        .narrow([iv(-1.5, 1.5), iv(-1.5, 1.5), iv(-1.5, 1.5)])
+        .expect("the far heart is left out");
+    for i in 0..=6 {
+        for j in 0..=6 {
+            let p = [-1.5 + 0.5 * i as f64, -1.5 + 0.5 * j as f64, 0.3];
+            assert_eq!(near.value(p), whole.value(p), "at {p:?}");
+            assert_eq!(near.gradient(p), whole.gradient(p), "at {p:?}");
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// A tape narrowed to a box (min/max choices and the custom nodes' own tapes) gives
+    /// the whole tape's values and gradients at every point of the box, bit for bit.
+    #[test]
+    fn a_narrowed_offset_is_the_whole_one_in_its_box(
+        c in [-3.0..9.0f64, -3.0..3.0f64, -3.0..3.0f64],
+        w in 0.05..3.0f64,
+        t in [0.0..1.0f64, 0.0..1.0f64, 0.0..1.0f64],
+    ) {
+        let two = union(&heart(), &move_by(&heart(), [6.0, 0.0, 0.0]).unwrap());
+        let ball = move_by(&sphere(1.0).unwrap(), [3.0, 3.0, 0.0]).unwrap();
+        let s = union(&offset(&two, 0.2).unwrap(), &ball);
+        let tape = Tape::new(&s);
+        let b = [0, 1, 2].map(|k| Interval::try_from((c[k] - w, c[k] + w)).unwrap());
+        let mut ie = IntervalEval::new();
+        ie.eval(&tape, b);
+        let short = tape.narrow(&ie);
+        let p = [0, 1, 2].map(|k| c[k] + (2.0 * t[k] - 1.0) * w);
+        let mut pe = PointEval::new();
+        prop_assert_eq!(pe.eval(&short, p), pe.eval(&tape, p));
+        let mut ge = GradEval::new();
+        let (a, z) = (ge.eval(&short, p), ge.eval(&tape, p));
+        prop_assert_eq!((a.v, a.d), (z.v, z.d));
+    }
+}
