@@ -61,10 +61,7 @@ impl CustomField for FirstOrderDistance {
     fn value(&self, p: [f64; 3]) -> f64 {
         with_evals(|e| {
             let g = e.grad.eval(&self.tape, p);
-            estimate(
-                g.v,
-                (g.d[0] * g.d[0] + g.d[1] * g.d[1] + g.d[2] * g.d[2]).sqrt(),
-            )
+            estimate(g.v, length(g.d))
         })
     }
 
@@ -72,10 +69,7 @@ impl CustomField for FirstOrderDistance {
         with_evals(|e| {
             for (i, o) in out.iter_mut().enumerate() {
                 let g = e.grad.eval(&self.tape, [xs[i], ys[i], zs[i]]);
-                *o = estimate(
-                    g.v,
-                    (g.d[0] * g.d[0] + g.d[1] * g.d[1] + g.d[2] * g.d[2]).sqrt(),
-                );
+                *o = estimate(g.v, length(g.d));
             }
         })
     }
@@ -136,7 +130,7 @@ impl CustomField for FirstOrderDistance {
             let g = e.grad.eval(&self.tape, p);
             (g.v, g.d)
         });
-        let n = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+        let n = length(g);
         let value = estimate(v, n);
         if !(n > 0.0 && n.is_finite() && v.is_finite()) || value.abs() >= MAX_DISTANCE {
             // Saturated (or no slope to go by): the estimate's own differences.
@@ -175,6 +169,11 @@ impl FirstOrderDistance {
         }
         g
     }
+}
+
+/// The length of a gradient.
+fn length(d: [f64; 3]) -> f64 {
+    (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
 }
 
 /// The difference step at `p`: a millionth of its largest coordinate (or of 1).
