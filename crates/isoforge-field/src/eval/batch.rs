@@ -6,7 +6,7 @@
 //! turns the arithmetic, min/max and abs loops into SIMD code. Transcendental functions
 //! stay calls into libm.
 
-use crate::eval::scalar;
+use crate::eval::{scalar, trig};
 use crate::op::{BinaryOp, UnaryOp};
 use crate::shape::Var;
 use crate::tape::{Op, Tape};
@@ -70,7 +70,21 @@ fn unary(op: UnaryOp, o: &mut Reg, a: &Reg) {
         UnaryOp::Square => map1(o, a, |x| x * x),
         UnaryOp::Floor => map1(o, a, f64::floor),
         UnaryOp::Ceil => map1(o, a, f64::ceil),
+        UnaryOp::Sin => trig_block(o, a, trig::sin_in_range, f64::sin),
+        UnaryOp::Cos => trig_block(o, a, trig::cos_in_range, f64::cos),
         op => map1(o, a, |x| scalar::unary(op, x)),
+    }
+}
+
+/// sin or cos over a block: the plain-arithmetic loop for every lane (it vectorizes), then
+/// libm for the rare lanes beyond [`trig::LIMIT`], as [`scalar::unary`] does per point.
+#[inline(always)]
+fn trig_block(o: &mut Reg, a: &Reg, in_range: impl Fn(f64) -> f64, libm: impl Fn(f64) -> f64) {
+    map1(o, a, in_range);
+    for (o, &x) in o.iter_mut().zip(a) {
+        if !trig::in_range(x) {
+            *o = libm(x);
+        }
     }
 }
 

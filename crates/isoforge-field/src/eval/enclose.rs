@@ -8,7 +8,9 @@
 //! widen each libm result outward by [`ULPS`] units in the last place. glibc's
 //! `sin cos tan asin acos atan exp ln atan2 pow` are accurate to within one ulp, so the
 //! true value at an endpoint lies within one ulp of libm's, and a libm result at any inner
-//! point lies within one ulp of the true value there: two ulps outward cover both. Extrema
+//! point lies within one ulp of the true value there: two ulps outward cover both. The
+//! point evaluators' own sin and cos (`trig.rs`) are within one ulp of the true value
+//! as well (under 0.83 measured), so the same two ulps cover them. Extrema
 //! inside the interval (sin and cos at k*pi/2) are found with a safety margin that only
 //! ever adds extrema, never misses one. Results are clamped to the function's true range.
 

@@ -4,7 +4,7 @@
 //! chain rule. Values are computed with the same [`crate::eval::scalar`] functions as the
 //! point evaluator, so `GradEval` values equal `PointEval` values bit for bit.
 
-use crate::eval::scalar;
+use crate::eval::{scalar, trig};
 use crate::op::{BinaryOp, UnaryOp};
 use crate::shape::Var;
 use crate::tape::{Op, Tape};
@@ -33,8 +33,20 @@ impl Grad {
 /// The value and derivative of a unary operation at `a`.
 #[inline(always)]
 fn unary(op: UnaryOp, a: Grad) -> Grad {
-    let v = scalar::unary(op, a.v);
     let x = a.v;
+    // sin and cos with one reduction for the value and the slope.
+    match op {
+        UnaryOp::Sin => {
+            let (s, c) = trig::sin_cos(x);
+            return a.scale(s, c);
+        }
+        UnaryOp::Cos => {
+            let (s, c) = trig::sin_cos(x);
+            return a.scale(c, -s);
+        }
+        _ => {}
+    }
+    let v = scalar::unary(op, a.v);
     let k = match op {
         UnaryOp::Neg => -1.0,
         // abs: the derivative's sign follows the argument's (0 at a kink counts as +).
@@ -48,8 +60,9 @@ fn unary(op: UnaryOp, a: Grad) -> Grad {
         UnaryOp::Recip => -(v * v),
         UnaryOp::Sqrt => 0.5 / v,
         UnaryOp::Square => 2.0 * x,
-        UnaryOp::Sin => x.cos(),
-        UnaryOp::Cos => -x.sin(),
+        // (Returned above, one reduction for both; the same values again.)
+        UnaryOp::Sin => trig::cos(x),
+        UnaryOp::Cos => -trig::sin(x),
         UnaryOp::Tan => 1.0 + v * v,
         UnaryOp::Asin => 1.0 / (1.0 - x * x).sqrt(),
         UnaryOp::Acos => -1.0 / (1.0 - x * x).sqrt(),

@@ -7,3 +7,4 @@ pub mod interval;
 pub mod interval_grad;
 pub mod point;
 pub mod scalar;
+pub mod trig;

@@ -3,6 +3,7 @@
 //! Every evaluator calls these same functions per point, so point, batch and gradient values
 //! agree bit for bit.
 
+use crate::eval::trig;
 use crate::op::{BinaryOp, UnaryOp};
 
 /// Applies a unary operation to a number.
@@ -14,8 +15,8 @@ pub fn unary(op: UnaryOp, a: f64) -> f64 {
         UnaryOp::Recip => 1.0 / a,
         UnaryOp::Sqrt => a.sqrt(),
         UnaryOp::Square => a * a,
-        UnaryOp::Sin => a.sin(),
-        UnaryOp::Cos => a.cos(),
+        UnaryOp::Sin => trig::sin(a),
+        UnaryOp::Cos => trig::cos(a),
         UnaryOp::Tan => a.tan(),
         UnaryOp::Asin => a.asin(),
         UnaryOp::Acos => a.acos(),
