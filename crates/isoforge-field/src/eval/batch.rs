@@ -72,6 +72,7 @@ fn unary(op: UnaryOp, o: &mut Reg, a: &Reg) {
         UnaryOp::Ceil => map1(o, a, f64::ceil),
         UnaryOp::Sin => trig_block(o, a, trig::sin_in_range, f64::sin),
         UnaryOp::Cos => trig_block(o, a, trig::cos_in_range, f64::cos),
+        UnaryOp::PowI(n) => scalar::powi_block(o, a, n),
         op => map1(o, a, |x| scalar::unary(op, x)),
     }
 }

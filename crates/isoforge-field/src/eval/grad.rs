@@ -70,7 +70,7 @@ fn unary(op: UnaryOp, a: Grad) -> Grad {
         UnaryOp::Exp => v,
         UnaryOp::Ln => 1.0 / x,
         UnaryOp::Floor | UnaryOp::Ceil | UnaryOp::Round => 0.0,
-        UnaryOp::PowI(n) => n as f64 * x.powi(n - 1),
+        UnaryOp::PowI(n) => n as f64 * scalar::powi(x, n.saturating_sub(1)),
     };
     // Piecewise-constant functions have zero slope even where the argument's gradient is
     // infinite; do not turn that into NaN.
