@@ -1,5 +1,6 @@
 //! Field kernel speed: point, batch (per point), interval and simplify, on gyroid_sphere
-//! (trig-heavy) and colonnade.vm (808 ops, mostly min/max).
+//! (trig-heavy), colonnade.vm (808 ops, mostly min/max) and spiky_ball (atan2-heavy:
+//! a radius over spherical angles, as fixtures/modern/spiky_ball.rhai).
 //!
 //! Run: `cargo bench -p isoforge-benches --bench field`.
 
@@ -20,6 +21,16 @@ fn gyroid_sphere() -> Tape {
     Tape::new(&(g.abs() - 0.3).max(&s))
 }
 
+/// `|p| - (0.8 + 0.2 (sin(5θ) cos(5φ))²)`, θ = atan2(y, x), φ = atan2(z, √(x² + y²)).
+fn spiky_ball() -> Tape {
+    let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+    let theta = y.atan2(&x);
+    let phi = z.atan2(&(x.square() + y.square()).sqrt());
+    let wave = (&theta * 5.0).sin() * (&phi * 5.0).cos();
+    let r = (x.square() + y.square() + z.square()).sqrt();
+    Tape::new(&(r - (wave.square() * 0.2 + 0.8)))
+}
+
 fn colonnade() -> Tape {
     let text = include_str!("../../fixtures/vm/colonnade.vm");
     Tape::new(&isoforge_field::vm::parse_vm(text).expect("colonnade.vm parses"))
@@ -28,11 +39,12 @@ fn colonnade() -> Tape {
 fn tape(name: &str) -> Tape {
     match name {
         "gyroid_sphere" => gyroid_sphere(),
+        "spiky_ball" => spiky_ball(),
         _ => colonnade(),
     }
 }
 
-const MODELS: [&str; 2] = ["gyroid_sphere", "colonnade"];
+const MODELS: [&str; 3] = ["gyroid_sphere", "colonnade", "spiky_ball"];
 
 /// Points spread over [-1, 1]^3 (a fixed scramble, not a grid, so no branch is favoured).
 fn points(n: usize) -> Vec<[f64; 3]> {
@@ -57,6 +69,7 @@ fn region(name: &str, cell: bool) -> [Interval; 3] {
     }
     let c = match name {
         "gyroid_sphere" => [0.6, 0.3, 0.5],
+        "spiky_ball" => [0.6, 0.45, 0.3],
         _ => [0.1, -0.2, 0.05],
     };
     c.map(|v| iv(v, v + 1.0 / 64.0))

@@ -3,8 +3,9 @@
 //! Points are worked through in blocks of [`BLOCK`]. Each register is a fixed-size array
 //! of one block, and each instruction is one loop over the block calling the same scalar
 //! function as the point evaluator; with the length known at compile time the compiler
-//! turns the arithmetic, min/max and abs loops into SIMD code. Transcendental functions
-//! stay calls into libm.
+//! turns the arithmetic, min/max and abs loops into SIMD code; sin, cos and atan2 too,
+//! written in plain arithmetic (`trig.rs`), and powers step by step. The other
+//! transcendental functions stay calls into libm.
 
 use crate::eval::{scalar, trig};
 use crate::op::{BinaryOp, UnaryOp};
@@ -89,6 +90,16 @@ fn trig_block(o: &mut Reg, a: &Reg, in_range: impl Fn(f64) -> f64, libm: impl Fn
     }
 }
 
+/// After the plain-arithmetic atan2 over every lane: libm for the lanes it does not
+/// cover (a zero, an infinity or NaN), as [`trig::atan2`] does per point.
+fn atan2_fixup(o: &mut Reg, y: &Reg, x: &Reg) {
+    for ((o, &y), &x) in o.iter_mut().zip(y).zip(x) {
+        if !trig::atan2_in_range(y, x) {
+            *o = y.atan2(x);
+        }
+    }
+}
+
 /// A binary operation over a block; `imm` variants pass a constant as one side.
 fn binary(op: BinaryOp, o: &mut Reg, a: &Reg, b: &Reg) {
     match op {
@@ -98,6 +109,10 @@ fn binary(op: BinaryOp, o: &mut Reg, a: &Reg, b: &Reg) {
         BinaryOp::Div => map2(o, a, b, |x, y| x / y),
         BinaryOp::Min => map2(o, a, b, scalar::min),
         BinaryOp::Max => map2(o, a, b, scalar::max),
+        BinaryOp::Atan2 => {
+            map2(o, a, b, trig::atan2_reduced);
+            atan2_fixup(o, a, b);
+        }
         op => map2(o, a, b, |x, y| scalar::binary(op, x, y)),
     }
 }
@@ -110,6 +125,10 @@ fn binary_ri(op: BinaryOp, o: &mut Reg, a: &Reg, c: f64) {
         BinaryOp::Div => map1(o, a, |x| x / c),
         BinaryOp::Min => map1(o, a, |x| scalar::min(x, c)),
         BinaryOp::Max => map1(o, a, |x| scalar::max(x, c)),
+        BinaryOp::Atan2 => {
+            map1(o, a, |x| trig::atan2_reduced(x, c));
+            atan2_fixup(o, a, &[c; BLOCK]);
+        }
         op => map1(o, a, |x| scalar::binary(op, x, c)),
     }
 }
@@ -122,6 +141,10 @@ fn binary_ir(op: BinaryOp, o: &mut Reg, c: f64, b: &Reg) {
         BinaryOp::Div => map1(o, b, |y| c / y),
         BinaryOp::Min => map1(o, b, |y| scalar::min(c, y)),
         BinaryOp::Max => map1(o, b, |y| scalar::max(c, y)),
+        BinaryOp::Atan2 => {
+            map1(o, b, |y| trig::atan2_reduced(c, y));
+            atan2_fixup(o, &[c; BLOCK], b);
+        }
         op => map1(o, b, |y| scalar::binary(op, c, y)),
     }
 }

@@ -300,7 +300,10 @@ pub fn atan2(y: Interval, x: Interval) -> (Interval, bool) {
             h = h.max(v);
         }
     }
-    (interval(down(l).max(-m), up(h).min(m)), false)
+    // Two ulps more than for libm alone: the point evaluators' atan2 (`trig.rs`) is
+    // within two ulps of the true value (1.71 the largest measured), libm within one.
+    let (l, h) = (down(down(l)), up(up(h)));
+    (interval(l.max(-m), h.min(m)), false)
 }
 
 /// `a - b * floor(a / b)`, enclosed by composing inari's rigorous operations (each f64

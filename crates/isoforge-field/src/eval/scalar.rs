@@ -119,7 +119,7 @@ pub fn binary(op: BinaryOp, a: f64, b: f64) -> f64 {
         BinaryOp::Div => a / b,
         BinaryOp::Min => min(a, b),
         BinaryOp::Max => max(a, b),
-        BinaryOp::Atan2 => a.atan2(b),
+        BinaryOp::Atan2 => trig::atan2(a, b),
         BinaryOp::Pow => a.powf(b),
         BinaryOp::Mod => modulo(a, b),
     }

@@ -1,16 +1,19 @@
-//! sin and cos in plain arithmetic, so that a loop over a block of points vectorizes.
+//! sin, cos and atan2 in plain arithmetic, so that a loop over a block of points
+//! vectorizes.
 //!
 //! libm's `sin` and `cos` are calls the compiler cannot vectorize: on the gyroid sphere at
 //! depth 9 they were 45 % of the meshing time, most of it the batch evaluator's lattice
-//! sampling, the rest the gradients (docs/architecture.md, "sin and cos"). Here `x` is
-//! reduced to `r = x − k·π/2`, `|r| ≤ π/4` (Cody and Waite's reduction: π/2 in three
-//! parts, the first two short enough that `k` times them is exact for `|k| < 2^20`, and
-//! `r` carried as a sum of two doubles), and sin or cos of `r` is its Taylor polynomial
-//! (Estrin's scheme, fused multiply-adds), to the term past which the rest is under
-//! 10^-19 of the result. The error is under one ulp (the test `within_an_ulp_of_libm`,
-//! and `tools/trig-accuracy.py`, which checks against 70-digit decimal arithmetic), so
-//! the interval evaluator's enclosures, made with libm and widened by two ulps
-//! (`enclose.rs`), still hold every value computed here.
+//! sampling, the rest the gradients (docs/architecture.md, "sin, cos and atan2"). Here
+//! `x` is reduced to `r = x − k·π/2`, `|r| ≤ π/4` (Cody and Waite's reduction: π/2 in
+//! three parts, the first two short enough that `k` times them is exact for `|k| < 2^20`,
+//! and `r` carried as a sum of two doubles), and sin or cos of `r` is its Taylor
+//! polynomial (Estrin's scheme, fused multiply-adds), to the term past which the rest is
+//! under 10^-19 of the result. The error is under one ulp (the test
+//! `within_an_ulp_of_libm`, and `tools/trig-accuracy.py`, which checks against 70-digit
+//! decimal arithmetic), so the interval evaluator's enclosures, made with libm and
+//! widened by two ulps (`enclose.rs`), still hold every value computed here. atan2 is the
+//! series of atan on the smaller coordinate over the larger, under 1.8 ulp from the truth
+//! measured (`enclose.rs` widens its enclosure by two ulps more).
 //!
 //! Beyond [`LIMIT`] the reduction would lose exactness, and libm answers. Every evaluator
 //! calls these functions for sin and cos, so they agree bit for bit: the batch evaluator
@@ -164,6 +167,118 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     }
 }
 
+/// π, π/2 and π/4 as a double and the rest: the rest is added after the angle's own sum
+/// so the angle keeps the bits a lone double of π would lose.
+const PI_HI: f64 = std::f64::consts::PI;
+const PI_LO: f64 = 1.2246467991473532e-16;
+const HALF_PI_HI: f64 = std::f64::consts::FRAC_PI_2;
+const HALF_PI_LO: f64 = 6.123233995736766e-17;
+const QUARTER_PI_HI: f64 = std::f64::consts::FRAC_PI_4;
+const QUARTER_PI_LO: f64 = 3.061616997868383e-17;
+/// Above a half, atan t is taken as π/4 + atan((t − 1)/(t + 1)): t − 1 is exact there.
+const HALF: f64 = 0.5;
+
+/// (atan u / u − 1) / u² as a polynomial in u²: (−1)^k / (2k + 1) for k = 1..28. At
+/// |u| ≤ 1/2 the rest of the series is under 10^-18 of the result.
+const A: [f64; 28] = [
+    -0.3333333333333333,
+    0.2,
+    -0.14285714285714285,
+    0.1111111111111111,
+    -0.09090909090909091,
+    0.07692307692307693,
+    -0.06666666666666667,
+    0.058823529411764705,
+    -0.05263157894736842,
+    0.047619047619047616,
+    -0.043478260869565216,
+    0.04,
+    -0.037037037037037035,
+    0.034482758620689655,
+    -0.03225806451612903,
+    0.030303030303030304,
+    -0.02857142857142857,
+    0.02702702702702703,
+    -0.02564102564102564,
+    0.024390243902439025,
+    -0.023255813953488372,
+    0.022222222222222223,
+    -0.02127659574468085,
+    0.02040816326530612,
+    -0.0196078431372549,
+    0.018867924528301886,
+    -0.01818181818181818,
+    0.017543859649122806,
+];
+
+/// `A[0] + A[1]·z + … + A[27]·z²⁷`: seven chunks of four by Horner, side by side, joined
+/// by Horner in z⁴.
+#[inline(always)]
+fn atan_poly(z: f64) -> f64 {
+    let chunk = |k: usize| {
+        let c = &A[4 * k..4 * k + 4];
+        c[3].mul_add(z, c[2]).mul_add(z, c[1]).mul_add(z, c[0])
+    };
+    let z4 = (z * z) * (z * z);
+    let mut p = chunk(6);
+    for k in (0..6).rev() {
+        p = p.mul_add(z4, chunk(k));
+    }
+    p
+}
+
+/// atan(num / den) for 0 ≤ num ≤ den. Above a half, π/4 + atan(u), u = (num − den) /
+/// (num + den), which needs no rounded quotient first: num − den is exact there
+/// (Sterbenz), and the one division is the only rounding before the series. Every
+/// choice is a select between values computed either way, so a loop of it vectorizes.
+#[inline(always)]
+fn atan_ratio(num: f64, den: f64) -> f64 {
+    let big = num > HALF * den;
+    let u = if big { num - den } else { num } / if big { num + den } else { den };
+    let z = u * u;
+    let small = (u * z).mul_add(atan_poly(z), u);
+    let (hi, lo) = if big {
+        (QUARTER_PI_HI, QUARTER_PI_LO)
+    } else {
+        (0.0, 0.0)
+    };
+    hi + (small + lo)
+}
+
+/// Largest |x| or |y| for [`atan2_reduced`]: num + den must not overflow.
+const ATAN2_LIMIT: f64 = 1e300;
+
+/// True when atan2(y, x) is computed here: both finite, neither zero, neither beyond
+/// [`ATAN2_LIMIT`] (zeros and infinities pick angles by their signs, which libm knows).
+#[inline(always)]
+pub fn atan2_in_range(y: f64, x: f64) -> bool {
+    x != 0.0 && y != 0.0 && x.abs() <= ATAN2_LIMIT && y.abs() <= ATAN2_LIMIT
+}
+
+/// atan2(y, x) where [`atan2_in_range`] holds, plain arithmetic (vectorizes in a loop):
+/// the angle of the smaller of |x|, |y| over the larger, then turned into its octant.
+#[inline(always)]
+pub fn atan2_reduced(y: f64, x: f64) -> f64 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let steep = ay > ax;
+    let a = atan_ratio(ax.min(ay), ax.max(ay));
+    let turned = HALF_PI_HI - (a - HALF_PI_LO);
+    let a = if steep { turned } else { a };
+    let back = PI_HI - (a - PI_LO);
+    let a = if x < 0.0 { back } else { a };
+    a.copysign(y)
+}
+
+/// atan2(y, x): the angle of the point (x, y), in [−π, π].
+#[inline(never)]
+pub fn atan2(y: f64, x: f64) -> f64 {
+    if atan2_in_range(y, x) {
+        atan2_reduced(y, x)
+    } else {
+        y.atan2(x)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -206,6 +321,37 @@ mod tests {
         }
         // libm is within an ulp of the truth too: one apart means both may be right.
         assert!(worst <= 1, "{worst} ulps from libm");
+    }
+
+    #[test]
+    fn atan2_within_two_ulps_of_libm_and_at_its_special_points() {
+        let mut worst = 0;
+        let mut pairs = numbers(11);
+        for i in 0..400_000 {
+            let (u, v) = (pairs.next().unwrap_or(0.5), pairs.next().unwrap_or(0.5));
+            let scale = [1.0, 1e-3, 1e3, 1e300][i % 4];
+            let (y, x) = ((2.0 * u - 1.0) * scale, (2.0 * v - 1.0) * scale);
+            worst = worst.max(ulps(atan2(y, x), y.atan2(x)));
+        }
+        // The quotient's rounding alone is half an ulp of t, up to an ulp of an angle
+        // below 1/2 (docs/architecture.md, "sin, cos and atan2").
+        assert!(worst <= 2, "{worst} ulps from libm");
+        let special = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            1e-310,
+        ];
+        for y in special {
+            for x in special {
+                let (ours, libm) = (atan2(y, x), y.atan2(x));
+                assert!(ours.to_bits() == libm.to_bits() || ours.is_nan() && libm.is_nan());
+            }
+        }
     }
 
     #[test]
