@@ -175,7 +175,8 @@ const HALF_PI_HI: f64 = std::f64::consts::FRAC_PI_2;
 const HALF_PI_LO: f64 = 6.123233995736766e-17;
 const QUARTER_PI_HI: f64 = std::f64::consts::FRAC_PI_4;
 const QUARTER_PI_LO: f64 = 3.061616997868383e-17;
-/// Above a half, atan t is taken as π/4 + atan((t − 1)/(t + 1)): t − 1 is exact there.
+/// Above this ratio, atan(num / den) is taken as π/4 + atan((num − den) / (num + den))
+/// ([`atan_ratio`]).
 const HALF: f64 = 0.5;
 
 /// (atan u / u − 1) / u² as a polynomial in u²: (−1)^k / (2k + 1) for k = 1..28. At
