@@ -206,6 +206,110 @@ fn threads_and_progress_are_honoured() {
     assert_eq!(one, all);
 }
 
+fn gyroid_ball() -> Shape {
+    let (x, y, z) = xyz();
+    let (x8, y8, z8) = (x.clone() * 8.0, y.clone() * 8.0, z.clone() * 8.0);
+    let g = x8.sin() * y8.cos() + y8.sin() * z8.cos() + z8.sin() * x8.cos();
+    (g.abs() - 0.3).max(&(x.square() + y.square() + z.square() - 1.0))
+}
+
+/// With more than one worker, the collapses, the splits and the sink run on a thread of
+/// their own, fed through a pipe in chunks (`dc/pipe.rs`); with one, inline. The mesh must
+/// be the same, on a mesh large enough to cross many chunks.
+#[test]
+fn the_stages_behind_the_mesher_give_the_same_mesh_on_their_own_thread() {
+    let s = gyroid_ball();
+    let mut settings = MeshSettings::new(cube(-1.5, 1.5), 6);
+    settings.threads = 1;
+    let inline = mesh_shape(&s, &settings);
+    settings.threads = 2;
+    let piped = mesh_shape(&s, &settings);
+    // Several of the pipe's chunks (8,192 vertices and triangles each).
+    assert!(
+        inline.triangles.len() > 70_000,
+        "{}",
+        inline.triangles.len()
+    );
+    assert!(
+        inline == piped,
+        "the piped mesh differs from the inline one"
+    );
+}
+
+/// A sink that fails on its n-th triangle, as a full disk would.
+struct FailingSink {
+    triangles: usize,
+    fail_at: usize,
+}
+
+impl isoforge_mesh::MeshSink for FailingSink {
+    fn vertex(&mut self, _: [f32; 3]) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn triangle(&mut self, _: [u32; 3], _: [[f32; 3]; 3]) -> std::io::Result<()> {
+        self.triangles += 1;
+        if self.triangles >= self.fail_at {
+            return Err(std::io::Error::other("no space left on the test's disk"));
+        }
+        Ok(())
+    }
+}
+
+#[test]
+fn a_sink_s_error_is_reported_inline_and_through_the_pipe() {
+    use isoforge_mesh::{MeshError, mesh_shape_into};
+    for threads in [1, 2] {
+        let mut settings = MeshSettings::new(cube(-1.5, 1.5), 6);
+        settings.threads = threads;
+        let mut sink = FailingSink {
+            triangles: 0,
+            fail_at: 1000,
+        };
+        let r = mesh_shape_into(&gyroid_ball(), &settings, &mut sink);
+        // The fault happened: the sink saw its thousandth triangle and refused it.
+        assert_eq!(sink.triangles, 1000, "threads {threads}");
+        match r {
+            Err(MeshError::Write(e)) => {
+                assert!(
+                    e.to_string().contains("no space left"),
+                    "threads {threads}: {e}"
+                )
+            }
+            other => panic!("threads {threads}: expected the sink's error, got {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn a_cancel_stops_the_mesher_inline_and_through_the_pipe() {
+    use isoforge_mesh::{MeshError, try_mesh_shape};
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    for threads in [1, 2] {
+        let cancel = Arc::new(AtomicBool::new(false));
+        let mut settings = MeshSettings::new(cube(-1.5, 1.5), 6);
+        settings.threads = threads;
+        settings.cancel = Some(cancel.clone());
+        // Cancelled half-way, from the progress callback, as the studio's button would.
+        let flag = cancel.clone();
+        settings.progress = Some(Arc::new(move |f| {
+            if f > 0.5 {
+                flag.store(true, Ordering::Relaxed);
+            }
+        }));
+        let r = try_mesh_shape(&gyroid_ball(), &settings);
+        assert!(
+            cancel.load(Ordering::Relaxed),
+            "threads {threads}: never cancelled"
+        );
+        assert!(
+            matches!(r, Err(MeshError::Cancelled)),
+            "threads {threads}: {:?}",
+            r.map(|m| m.triangles.len())
+        );
+    }
+}
+
 /// Balls narrower than about a cell, each holding one lattice corner (drawn by the random
 /// CSG test below, whose seeds they were): dual contouring alone must mesh them facing
 /// out (most of their area), and with the refiner at a tight tolerance they must stay the

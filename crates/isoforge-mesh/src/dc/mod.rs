@@ -16,7 +16,8 @@
 //!    into triangles so that the result is a 2-manifold (the module doc there has the
 //!    argument);
 //! 5. `stream.rs`: the schedule, slab by slab along z, polygons handed on as soon as
-//!    they are known;
+//!    they are known; with more than one worker, stages 6 to 8 and the sink take them on
+//!    a thread of their own, in order (`pipe.rs`);
 //! 6. `decimate.rs`: with a tolerance, edge collapses checked against the field (on
 //!    chunks of 65,536 triangles, for as long as collapsing pays);
 //! 7. `refine.rs`: with a tolerance, vertices off the surface moved onto it and triangles
@@ -36,6 +37,7 @@ pub mod leaf;
 pub mod merge;
 pub mod narrowed;
 pub mod octree;
+pub mod pipe;
 pub mod qef;
 pub mod refine;
 pub mod sampler;

@@ -20,6 +20,7 @@ use super::hermite::{self, Crossing, EdgeRef, Scratch};
 use super::leaf::{self, BlockInput, BlockOut, LeafScratch, Merging, NO_VERT};
 use super::merge::{AboveBlocks, Resolved};
 use super::octree::{Class, Grid, Octree};
+use super::pipe;
 use super::refine::Refiner;
 use super::sampler::{EvalPool, Sampler};
 use super::shells::SmallShells;
@@ -43,16 +44,58 @@ struct Pass2Scratch {
 }
 
 /// Meshes a sampled field into a sink; with merging on, through the edge collapses of
-/// `decimate.rs` and the splits of `refine.rs`.
+/// `decimate.rs` and the splits of `refine.rs`. With more than one worker those stages
+/// and the sink run on a thread of their own (`pipe.rs`), fed in order.
 pub fn run<S: Sampler>(
     sampler: &S,
     settings: &MeshSettings,
     merging: Merging,
     block_shift: u32,
+    sink: &mut (dyn MeshSink + Send),
+) -> Result<(), MeshError> {
+    if rayon::current_num_threads() <= 1 {
+        return behind(sampler, settings, merging, sink, |s| {
+            contour_into(sampler, settings, merging, block_shift, s)
+        });
+    }
+    let (mut pipe, drain) = pipe::pipe();
+    let (made, staged) = std::thread::scope(|scope| {
+        let stages =
+            scope.spawn(move || behind(sampler, settings, merging, sink, |s| drain.into_sink(s)));
+        let made = match contour_into(sampler, settings, merging, block_shift, &mut pipe) {
+            Ok(()) => pipe.end().map_err(MeshError::Write),
+            // Dropping the pipe without its end tells the stages not to finish.
+            Err(e) => {
+                drop(pipe);
+                Err(e)
+            }
+        };
+        let staged = match stages.join() {
+            Ok(r) => r,
+            Err(panic) => std::panic::resume_unwind(panic),
+        };
+        (made, staged)
+    });
+    match (made, staged) {
+        (Ok(()), staged) => staged,
+        // The pipe stopped because the stages behind did: theirs is the cause.
+        (Err(MeshError::Write(_)), Err(e)) => Err(e),
+        (Err(e), _) => Err(e),
+    }
+}
+
+/// The stages behind the emitter, given what `feed` sends them, and finished when it
+/// says the mesh is complete: with merging on the edge collapses, the splits and the small
+/// parts' check, then the sink; with it off the sink alone.
+fn behind<S: Sampler>(
+    sampler: &S,
+    settings: &MeshSettings,
+    merging: Merging,
     sink: &mut dyn MeshSink,
+    feed: impl FnOnce(&mut dyn MeshSink) -> Result<(), MeshError>,
 ) -> Result<(), MeshError> {
     if !merging.on() {
-        return contour_into(sampler, settings, merging, block_shift, sink);
+        return feed(sink);
     }
     let tolerance = settings
         .effective_tolerance()
@@ -66,7 +109,7 @@ pub fn run<S: Sampler>(
         &mut shells,
     );
     let mut decimator = Decimator::new(sampler, tolerance, settings.cell(), &mut refiner);
-    contour_into(sampler, settings, merging, block_shift, &mut decimator)?;
+    feed(&mut decimator)?;
     decimator.finish().map_err(MeshError::Write)?;
     refiner.finish().map_err(MeshError::Write)?;
     if let Some(notes) = &settings.notes {
