@@ -9,6 +9,8 @@
 //! order of what reaches the sink is unchanged, so the output is the same bytes.
 
 use std::io;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 
 use super::MeshError;
@@ -39,22 +41,30 @@ enum Message {
 pub struct Pipe {
     tx: SyncSender<Message>,
     chunk: Vec<Event>,
+    /// Set when the pipe is dropped without its end, so that the drain stops at once
+    /// instead of working through the chunks still waiting (a cancel is then prompt).
+    abandoned: Arc<AtomicBool>,
+    ended: bool,
 }
 
 /// The stages' end of the pipe.
 pub struct Drain {
     rx: Receiver<Message>,
+    abandoned: Arc<AtomicBool>,
 }
 
 /// A pipe and its drain.
 pub fn pipe() -> (Pipe, Drain) {
     let (tx, rx) = sync_channel(CHUNKS_IN_FLIGHT);
+    let abandoned = Arc::new(AtomicBool::new(false));
     (
         Pipe {
             tx,
             chunk: Vec::with_capacity(CHUNK),
+            abandoned: abandoned.clone(),
+            ended: false,
         },
-        Drain { rx },
+        Drain { rx, abandoned },
     )
 }
 
@@ -78,11 +88,20 @@ impl Pipe {
 
     /// Sends what is queued and says that nothing more comes.
     pub fn end(mut self) -> io::Result<()> {
+        self.ended = true;
         let rest = std::mem::take(&mut self.chunk);
         if !rest.is_empty() {
             self.send(Message::Events(rest))?;
         }
         self.send(Message::End)
+    }
+}
+
+impl Drop for Pipe {
+    fn drop(&mut self) {
+        if !self.ended {
+            self.abandoned.store(true, Ordering::Relaxed);
+        }
     }
 }
 
@@ -102,6 +121,9 @@ impl Drain {
     /// its own error is the one to report).
     pub fn into_sink(self, sink: &mut dyn MeshSink) -> Result<(), MeshError> {
         for m in self.rx {
+            if self.abandoned.load(Ordering::Relaxed) {
+                break;
+            }
             match m {
                 Message::End => return Ok(()),
                 Message::Events(events) => {
@@ -156,12 +178,20 @@ mod tests {
     }
 
     #[test]
-    fn a_pipe_dropped_without_its_end_is_not_finished() {
+    fn a_pipe_dropped_without_its_end_is_not_finished_nor_drained() {
         let (mut p, d) = pipe();
-        p.vertex([1.0, 2.0, 3.0]).unwrap();
+        // Two full chunks wait in the channel when the pipe is dropped.
+        for _ in 0..2 * CHUNK {
+            p.vertex([1.0, 2.0, 3.0]).unwrap();
+        }
         drop(p);
         let mut m = Mesh::default();
         assert!(matches!(d.into_sink(&mut m), Err(MeshError::Cancelled)));
+        assert!(
+            m.vertices.is_empty(),
+            "{} vertices drained",
+            m.vertices.len()
+        );
     }
 
     /// A sink that refuses its second triangle.
