@@ -53,11 +53,28 @@ pub fn run<S: Sampler>(
     block_shift: u32,
     sink: &mut (dyn MeshSink + Send),
 ) -> Result<(), MeshError> {
-    if rayon::current_num_threads() <= 1 {
-        return behind(sampler, settings, merging, sink, |s| {
+    let done = if rayon::current_num_threads() <= 1 {
+        behind(sampler, settings, merging, sink, |s| {
             contour_into(sampler, settings, merging, block_shift, s)
-        });
+        })
+    } else {
+        piped(sampler, settings, merging, block_shift, sink)
+    };
+    // Done only when the stages behind are: they may still be at work on the last slabs.
+    if let (Ok(()), Some(p)) = (&done, &settings.progress) {
+        p(1.0);
     }
+    done
+}
+
+/// [`run`] with the stages behind the emitter on a thread of their own.
+fn piped<S: Sampler>(
+    sampler: &S,
+    settings: &MeshSettings,
+    merging: Merging,
+    block_shift: u32,
+    sink: &mut (dyn MeshSink + Send),
+) -> Result<(), MeshError> {
     let (mut pipe, drain) = pipe::pipe();
     let (made, staged) = std::thread::scope(|scope| {
         let stages =
@@ -316,9 +333,6 @@ fn contour_into<S: Sampler>(
     // Everything is decided once the last slab is: the leaves still waiting are final.
     emitter.sweep(&mut above)?;
     debug_assert!(emitter.deferred.is_empty(), "polygons left waiting");
-    if let Some(p) = progress {
-        p(1.0);
-    }
     Ok(())
 }
 
