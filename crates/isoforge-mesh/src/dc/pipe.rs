@@ -5,7 +5,7 @@
 //! Those stages are serial (each decision depends on the ones before it), and before they
 //! had a thread of their own they ran between the slabs, with the workers idle: on
 //! gyroid_sphere at depth 9 the main thread did 37 % of the CPU work with the other core
-//! waiting (docs/meshing.md, "The stages behind the emitter on their own thread"). The
+//! waiting (docs/meshing.md, "The stages behind the mesher on their own thread"). The
 //! order of what reaches the sink is unchanged, so the output is the same bytes.
 
 use std::io;
