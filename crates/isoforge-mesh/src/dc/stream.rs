@@ -77,8 +77,22 @@ fn piped<S: Sampler>(
 ) -> Result<(), MeshError> {
     let (mut pipe, drain) = pipe::pipe();
     let (made, staged) = std::thread::scope(|scope| {
-        let stages =
-            scope.spawn(move || behind(sampler, settings, merging, sink, |s| drain.into_sink(s)));
+        let spawned = std::thread::Builder::new()
+            .name("isoforge-mesh-stages".into())
+            .spawn_scoped(scope, move || {
+                behind(sampler, settings, merging, sink, |s| drain.into_sink(s))
+            });
+        let stages = match spawned {
+            Ok(handle) => handle,
+            // (The sink went with the closure: nothing was written to it.)
+            Err(e) => {
+                let error = MeshError::Threads {
+                    threads: 1,
+                    message: e.to_string(),
+                };
+                return (Err(error), Ok(()));
+            }
+        };
         let made = match contour_into(sampler, settings, merging, block_shift, &mut pipe) {
             Ok(()) => pipe.end().map_err(MeshError::Write),
             // Dropping the pipe without its end tells the stages not to finish.
