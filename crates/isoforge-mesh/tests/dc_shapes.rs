@@ -169,10 +169,7 @@ fn deep_union_of_hundreds_of_spheres() {
 
 #[test]
 fn gyroid_sphere_depths_5_to_7() {
-    let (x, y, z) = xyz();
-    let (x8, y8, z8) = (x.clone() * 8.0, y.clone() * 8.0, z.clone() * 8.0);
-    let g = x8.sin() * y8.cos() + y8.sin() * z8.cos() + z8.sin() * x8.cos();
-    let s = (g.abs() - 0.3).max(&(x.square() + y.square() + z.square() - 1.0));
+    let s = gyroid_ball();
     for depth in 5..=7 {
         let (_, vol) = mesh_ok(&s, cube(-1.5, 1.5), depth, "gyroid sphere");
         if depth == 7 {
@@ -206,6 +203,7 @@ fn threads_and_progress_are_honoured() {
     assert_eq!(one, all);
 }
 
+/// gyroid_sphere's field (fixtures/bench): a gyroid sheet 0.3 thick in the unit ball.
 fn gyroid_ball() -> Shape {
     let (x, y, z) = xyz();
     let (x8, y8, z8) = (x.clone() * 8.0, y.clone() * 8.0, z.clone() * 8.0);
