@@ -668,6 +668,38 @@ fn turned_cube_is_a_few_triangles_at_every_depth() {
     }
 }
 
+#[test]
+fn turned_cube_is_its_twelve_triangles_where_its_corners_lie_just_outside_cells() {
+    // Where a corner or an edge of the cube runs just outside a cell whose crossings lie on
+    // the faces beside it, the cell's vertex goes where those faces' planes meet, not onto
+    // the cell's wall: the cube is its 12 triangles at depths 6 to 8 and 20 at depth 9
+    // (before: 30 at depth 6 and 154 at depth 9, with chords along the edges between
+    // vertices held on cell walls).
+    let (shape, frame) = turned_cube();
+    for depth in [6, 9] {
+        let settings = MeshSettings::new(cube(-1.8, 1.8), depth);
+        let (mesh, volume) = mesh_ok_with(&shape, &settings, "turned cube");
+        assert!(
+            mesh.triangles.len() <= 24,
+            "depth {depth}: {} triangles",
+            mesh.triangles.len()
+        );
+        assert!(
+            (volume - 8.0).abs() < 1e-3,
+            "depth {depth}: volume {volume}"
+        );
+        let cell = 3.6 / f64::from(1u32 << depth);
+        for v in &mesh.vertices {
+            let d = box_distance(frame(v.map(f64::from)));
+            assert!(
+                d <= 0.01 * cell,
+                "depth {depth}: a vertex {} cell off",
+                d / cell
+            );
+        }
+    }
+}
+
 /// A cube of side 2 turned about x, then y, then z (degrees), as in
 /// `RotateZ(RotateY(RotateX(Cube(2), a), b), c)`: the field, and the map from world points
 /// into the cube's own frame.

@@ -103,6 +103,11 @@ impl Qef {
         }
     }
 
+    /// How many planes were added.
+    pub fn count(&self) -> u32 {
+        self.count
+    }
+
     /// The mean of the crossings.
     pub fn mass_point(&self) -> DVec3 {
         self.origin + self.mass / f64::from(self.count.max(1))
@@ -116,7 +121,6 @@ impl Qef {
 
     /// The minimizer over all space (truncated, around the mass point); the mass point when
     /// nothing better is defined.
-    #[cfg(test)]
     pub fn solve(&self) -> DVec3 {
         if self.count == 0 {
             return self.origin;

@@ -9,8 +9,9 @@
 //!   on both sides of it cuts the corner: at depth 8 such triangles missed the surface by
 //!   3.4 tolerances. The vertices are where they should be; the chords between them are not.
 //! * **Features smaller than a cell.** A finest cell's vertex stays in its cell (that keeps
-//!   the mesh free of folds), and where the surface bends within a cell it may sit a third
-//!   of a cell off the surface (sinus_bugs).
+//!   the mesh free of folds; it leaves the cell only for a crease or corner just beyond,
+//!   where its planes meet on the surface), and where the surface bends within a cell it
+//!   may sit a third of a cell off the surface (sinus_bugs).
 //!
 //! So each vertex whose distance by the field (|F| / |∇F|) is over half the tolerance is
 //! moved onto the surface by Newton steps along the gradient, if that takes it less than
@@ -58,9 +59,9 @@
 //!
 //! What it costs: one gradient per vertex, and one per edge whose ends' normals say a chord
 //! there could be off by a quarter of the tolerance (a circular arc of chord `l` whose
-//! normals turn by `θ` is `l/2 · tan(θ/4)` from it) or that is longer than [`LONG_CELLS`]
-//! (two crease vertices may read the same face's normal): along creases, and along the long
-//! chords of merged leaves. At depth 8 that took spheres_chain from 0.20 to
+//! normals turn by `θ` is `l/2 · tan(θ/4)` from it) or that is longer than a cell
+//! ([`PROBE_CELLS`]; two crease vertices may read the same face's normal): along creases,
+//! along the diagonals of finest cells, and along the long chords of merged leaves. At depth 8 that took spheres_chain from 0.20 to
 //! 0.39 s and gyroid_sphere from 0.60 to 0.95 s (a stricter filter saved little and let
 //! curve_cyl's chords miss by 3.7 tolerances instead of 2.8).
 
@@ -87,8 +88,16 @@ const SPLIT_SHARE: f64 = 0.8;
 const FILTER_SHARE: f64 = 0.25;
 
 /// Edges longer than this many finest cells are looked at by the field whatever their
-/// ends' normals say, and triangles whose sides are all longer may take a centre vertex
-/// again in a centre split's pieces. At a crease a vertex's normal is one face's, so two
+/// ends' normals say. Two vertices on one face read the same normal even where another
+/// face cuts in between them: on threaded_rod at depth 8 a chord 1.4 cells long between
+/// two vertices on the rod's core passed under the tapered end of the thread, its middle
+/// 1.03 tolerances inside, and was never looked at (with [`LONG_CELLS`] here). Costs 5 to
+/// 10 % of the meshing time on the bench models at depth 9.
+const PROBE_CELLS: f64 = 1.0;
+
+/// Edges longer than this many finest cells were looked at by the field whatever their
+/// ends' normals say (now [`PROBE_CELLS`]), and triangles whose sides are all longer may
+/// take a centre vertex again in a centre split's pieces. At a crease a vertex's normal is one face's, so two
 /// vertices on a curved crease can read the same normal: on cube_holes (a slicing
 /// fixture) at depth 8, a chord of the merge's crossed its 5 mm hole 0.22 mm inside the rim
 /// (26 tolerances) and was never looked at. And on pins, strips of the cylinders from cap
@@ -188,10 +197,6 @@ const THIN: f64 = 0.1;
 /// to hold without Newton steps ([`Refiner::strays`]): beside faces meeting at 60° and more,
 /// the distance to their crease is at most twice the distance to the nearer face's plane.
 const BAND_SHARE: f64 = 0.5;
-
-/// Normals this near (cosine, 26°) to the field's at a point say the surface around it is
-/// smooth, where the first-order distance is right ([`Refiner::strays`]).
-const SMOOTH_COS: f64 = 0.9;
 
 /// Two vertex normals closer than this (cosine, 60°) do not make a crease between them.
 const CREASE_COS: f64 = 0.5;
@@ -516,29 +521,32 @@ impl<'a, S: Sampler> Refiner<'a, S> {
     /// its middle 0.78 tolerances off by that reading and 1.02 in truth. So between
     /// [`BAND_SHARE`] and the threshold, the distance is how far Newton steps (which go to
     /// where both faces' planes meet at a crease) take the point to the surface.
-    fn strays(
-        &mut self,
-        p: DVec3,
-        normals: &[DVec3],
-        reach: f64,
-    ) -> Option<(f64, Option<(DVec3, DVec3)>)> {
+    ///
+    /// On a smooth part the reading is right only where the field is a distance. Where it
+    /// is not, it may read short: on knurled_knob's textured faces a chord's middle read
+    /// 0.79 tolerances and was 1.09 off. So the reading is taken only where one
+    /// first-order step lands on the surface. And where it reads long (inside a hull, whose
+    /// field there is a bound a few tenths of a millimetre below the distance), the
+    /// distance is where the Newton steps land, when they do.
+    fn strays(&mut self, p: DVec3, reach: f64) -> Option<(f64, Option<(DVec3, DVec3)>)> {
         let (f, n, d) = self.probe(p)?;
         let threshold = self.tolerance * SPLIT_SHARE;
         if d <= threshold * BAND_SHARE {
             return None;
         }
-        // On a smooth part (the normals around agree), or where one first-order step lands
-        // on the surface, the reading was right.
+        // Where one first-order step lands on the surface, the reading was right.
         if d <= threshold
-            && (normals.iter().all(|m| m.dot(n) > SMOOTH_COS)
-                || self
-                    .probe(p - n * (f.signum() * d))
-                    .is_some_and(|(_, _, d1)| d1 <= self.tolerance * 0.1))
+            && self
+                .probe(p - n * (f.signum() * d))
+                .is_some_and(|(_, _, d1)| d1 <= self.tolerance * 0.1)
         {
             return None;
         }
         let along = self.onto_surface(p, reach);
-        let far = d > threshold || along.is_some_and(|(q, _)| (q - p).length() > threshold);
+        let far = match along {
+            Some((q, _)) => (q - p).length() > threshold,
+            None => d > threshold,
+        };
         far.then_some((f, along))
     }
 
@@ -628,11 +636,11 @@ impl<'a, S: Sampler> Refiner<'a, S> {
     }
 
     /// Whether the chord between two vertices can be off by the tolerance, by their
-    /// normals (the module doc); true where a normal is unknown or the chord is long
-    /// ([`LONG_CELLS`]).
+    /// normals (the module doc); true where a normal is unknown or the chord is longer
+    /// than a cell ([`PROBE_CELLS`]).
     fn may_stray(&self, a: &Vert, b: &Vert, len: f64) -> bool {
         let (na, nb) = (a.normal(), b.normal());
-        if na == DVec3::ZERO || nb == DVec3::ZERO || len > LONG_CELLS * self.cell {
+        if na == DVec3::ZERO || nb == DVec3::ZERO || len > PROBE_CELLS * self.cell {
             return true;
         }
         let theta = na.dot(nb).clamp(-1.0, 1.0).acos();
@@ -673,7 +681,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         }
         let reach = len * MID_REACH;
         // +1 where the middle is inside the solid (a split moves it outward), −1 outside.
-        let Some((f, along)) = self.strays(mid, &[va.normal(), vb.normal()], reach) else {
+        let Some((f, along)) = self.strays(mid, reach) else {
             return Ok(None);
         };
         let outward = -f.signum();
@@ -931,8 +939,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             return Ok(None);
         }
         let c = (p[0] + p[1] + p[2]) / 3.0;
-        let normals = v.map(|x| x.normal());
-        let Some((_, Some((q, n)))) = self.strays(c, &normals, shortest * MID_REACH) else {
+        let Some((_, Some((q, n)))) = self.strays(c, shortest * MID_REACH) else {
             return Ok(None);
         };
         // Not if a piece would face against the field both at the new vertex and at its
@@ -1325,7 +1332,14 @@ mod tests {
         let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
         let bounds = Bounds::new([-1.3; 3], [1.3; 3]).unwrap();
         let (uniform, out) = refined(&ball, bounds, 6, 0.1 * 2.6 / 64.0);
-        assert_eq!(uniform.triangles, out.triangles);
+        // The same triangles, in an order of their own: a triangle waits for its
+        // neighbours across the edges the refiner looks at.
+        let sorted = |m: &Mesh| {
+            let mut t = m.triangles.clone();
+            t.sort_unstable();
+            t
+        };
+        assert_eq!(sorted(&uniform), sorted(&out));
         assert_eq!(uniform.vertices, out.vertices);
     }
 
