@@ -91,8 +91,8 @@ const FILTER_SHARE: f64 = 0.25;
 /// ends' normals say. Two vertices on one face read the same normal even where another
 /// face cuts in between them: on threaded_rod at depth 8 a chord 1.4 cells long between
 /// two vertices on the rod's core passed under the tapered end of the thread, its middle
-/// 1.03 tolerances inside, and was never looked at (with [`LONG_CELLS`] here). Costs 5 to
-/// 10 % of the meshing time on the bench models at depth 9.
+/// 1.03 tolerances off, and was never looked at (with [`LONG_CELLS`] here). Costs about
+/// 10 % of the CPU time of gyroid_sphere and spheres_chain at depth 9.
 const PROBE_CELLS: f64 = 1.0;
 
 /// Edges longer than this many finest cells were looked at by the field whatever their
