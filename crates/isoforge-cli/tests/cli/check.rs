@@ -312,9 +312,9 @@ fn a_boat_hull_s_bow_holds_its_tolerance() {
 
 /// The knob's knurl: its ridges run just outside cells whose crossings lie on both of
 /// their faces, and the box held those cells' vertices on their walls (1.60 tolerances
-/// off); placed where their planes meet, 1.09 was left, a chord's middle on a textured
-/// face whose field is not a distance, read 0.79 tolerances by |F| / |∇F| and taken to
-/// hold. The refiner now takes that reading only where one step along it lands on the
+/// off). With them where their planes meet, 1.09 was left: a chord's middle on a knurled
+/// face, whose field is not a distance, read 0.79 tolerances by |F| / |∇F| and was taken
+/// to hold. The refiner now takes that reading only where one step along it lands on the
 /// surface.
 #[test]
 fn a_knurled_knob_s_textured_faces_hold_their_tolerance() {

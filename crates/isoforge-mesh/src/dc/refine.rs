@@ -61,9 +61,10 @@
 //! there could be off by a quarter of the tolerance (a circular arc of chord `l` whose
 //! normals turn by `θ` is `l/2 · tan(θ/4)` from it) or that is longer than a cell
 //! ([`PROBE_CELLS`]; two crease vertices may read the same face's normal): along creases,
-//! along the diagonals of finest cells, and along the long chords of merged leaves. At depth 8 that took spheres_chain from 0.20 to
-//! 0.39 s and gyroid_sphere from 0.60 to 0.95 s (a stricter filter saved little and let
-//! curve_cyl's chords miss by 3.7 tolerances instead of 2.8).
+//! along the diagonals of finest cells, and along the long chords of merged leaves. At
+//! depth 8 the filter without the diagonals took spheres_chain from 0.20 to 0.39 s and
+//! gyroid_sphere from 0.60 to 0.95 s (a stricter filter saved little and let curve_cyl's
+//! chords miss by 3.7 tolerances instead of 2.8); the diagonals cost about 10 % more.
 
 use std::collections::{HashMap, HashSet, VecDeque};
 use std::io;
@@ -97,12 +98,12 @@ const PROBE_CELLS: f64 = 1.0;
 
 /// Edges longer than this many finest cells were looked at by the field whatever their
 /// ends' normals say (now [`PROBE_CELLS`]), and triangles whose sides are all longer may
-/// take a centre vertex again in a centre split's pieces. At a crease a vertex's normal is one face's, so two
-/// vertices on a curved crease can read the same normal: on cube_holes (a slicing
-/// fixture) at depth 8, a chord of the merge's crossed its 5 mm hole 0.22 mm inside the rim
-/// (26 tolerances) and was never looked at. And on pins, strips of the cylinders from cap
-/// to cap (64 cells long) kept their centres' pieces 1.07 tolerances off. Such edges are
-/// few: the merge makes them only on flat and nearly flat parts.
+/// take a centre vertex again in a centre split's pieces. At a crease a vertex's normal is
+/// one face's, so two vertices on a curved crease can read the same normal: on cube_holes
+/// (a slicing fixture) at depth 8, a chord of the merge's crossed its 5 mm hole 0.22 mm
+/// inside the rim (26 tolerances) and was never looked at. And on pins, strips of the
+/// cylinders from cap to cap (64 cells long) kept their centres' pieces 1.07 tolerances
+/// off. Such edges are few: the merge makes them only on flat and nearly flat parts.
 const LONG_CELLS: f64 = 2.0;
 
 /// A vertex farther than this share of the tolerance from the surface is moved onto it.
