@@ -637,34 +637,35 @@ fn turned_cube_vertices_are_on_its_faces_measured_exactly() {
     }
 }
 
+/// The fixture's turned cube meshed at `depth` with the default tolerance: its triangles,
+/// its volume, and its vertices' largest exact distance from the cube, in cells.
+fn turned_cube_at(depth: u8) -> (usize, f64, f64) {
+    let (shape, frame) = turned_cube();
+    let settings = MeshSettings::new(cube(-1.8, 1.8), depth);
+    let (mesh, volume) = mesh_ok_with(&shape, &settings, "turned cube");
+    let cell = 3.6 / f64::from(1u32 << depth);
+    let worst = mesh
+        .vertices
+        .iter()
+        .map(|v| box_distance(frame(v.map(f64::from))))
+        .fold(0.0, f64::max);
+    (mesh.triangles.len(), volume, worst / cell)
+}
+
 #[test]
 fn turned_cube_is_a_few_triangles_at_every_depth() {
     // A box turned off the lattice: its edges block the octree merge (a leaf edge there
     // would hold two crossings), and the field-checked collapses take the triangles along
     // them away. Depth 9 was 16,224 triangles before them.
-    let (shape, frame) = turned_cube();
     for depth in [6, 9] {
-        let settings = MeshSettings::new(cube(-1.8, 1.8), depth);
-        let (mesh, volume) = mesh_ok_with(&shape, &settings, "turned cube");
-        assert!(
-            mesh.triangles.len() < 2000,
-            "depth {depth}: {} triangles",
-            mesh.triangles.len()
-        );
+        let (triangles, volume, worst) = turned_cube_at(depth);
+        assert!(triangles < 2000, "depth {depth}: {triangles} triangles");
         assert!(
             (volume - 8.0).abs() < 0.01,
             "depth {depth}: volume {volume}"
         );
         // Every vertex on the cube: collapses keep vertices where dual contouring put them.
-        let cell = 3.6 / f64::from(1u32 << depth);
-        for v in &mesh.vertices {
-            let d = box_distance(frame(v.map(f64::from)));
-            assert!(
-                d <= 0.3 * cell,
-                "depth {depth}: a vertex {} cell off",
-                d / cell
-            );
-        }
+        assert!(worst <= 0.3, "depth {depth}: a vertex {worst} cell off");
     }
 }
 
@@ -675,28 +676,14 @@ fn turned_cube_is_its_twelve_triangles_where_its_corners_lie_just_outside_cells(
     // the cell's wall: the cube is its 12 triangles at depths 6 to 8 and 20 at depth 9
     // (before: 30 at depth 6 and 154 at depth 9, with chords along the edges between
     // vertices held on cell walls).
-    let (shape, frame) = turned_cube();
     for depth in [6, 9] {
-        let settings = MeshSettings::new(cube(-1.8, 1.8), depth);
-        let (mesh, volume) = mesh_ok_with(&shape, &settings, "turned cube");
-        assert!(
-            mesh.triangles.len() <= 24,
-            "depth {depth}: {} triangles",
-            mesh.triangles.len()
-        );
+        let (triangles, volume, worst) = turned_cube_at(depth);
+        assert!(triangles <= 24, "depth {depth}: {triangles} triangles");
         assert!(
             (volume - 8.0).abs() < 1e-3,
             "depth {depth}: volume {volume}"
         );
-        let cell = 3.6 / f64::from(1u32 << depth);
-        for v in &mesh.vertices {
-            let d = box_distance(frame(v.map(f64::from)));
-            assert!(
-                d <= 0.01 * cell,
-                "depth {depth}: a vertex {} cell off",
-                d / cell
-            );
-        }
+        assert!(worst <= 0.01, "depth {depth}: a vertex {worst} cell off");
     }
 }
 

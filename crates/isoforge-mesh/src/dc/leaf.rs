@@ -588,20 +588,19 @@ impl<S: Sampler> Merger<'_, '_, S> {
         }
         let (lo, hi) = self.node_box(0, cell.at);
         let (x, held) = qef.solve_held(lo, hi);
-        let x = if held {
-            match self.beyond_its_box(&qef, lo, hi) {
+        let x = match held {
+            Some(free) => match self.beyond_its_box(&qef, free, lo, hi) {
                 Some(free) => free,
                 None => self.onto_surface(x, lo, hi),
-            }
-        } else {
-            x
+            },
+            None => x,
         };
         self.facing_its_cell(x, cell, (lo, hi))
     }
 
-    /// The free QEF point of a box-held finest cell, where the planes meet just beyond
-    /// the box (within [`FREE_REACH`]), meet there well ([`FREE_FIT`]) and the field puts
-    /// that point on the surface ([`FREE_ON`]); `None` otherwise, and always at
+    /// `free`, the free QEF point of a box-held finest cell, where the planes meet just
+    /// beyond the box (within [`FREE_REACH`]), meet there well ([`FREE_FIT`]) and the field
+    /// puts that point on the surface ([`FREE_ON`]); `None` otherwise, and always at
     /// `--tolerance 0`, whose uniform mesh keeps every vertex in its cell.
     ///
     /// Where a crease or a corner runs just outside a cell whose crossings lie on both of
@@ -612,13 +611,12 @@ impl<S: Sampler> Merger<'_, '_, S> {
     /// neighbour's, so the refiner (which looks at every chord longer than a cell, and
     /// keeps vertices from landing on each other) is what makes it safe, and the uniform
     /// mesh, which has no refiner, does not do it.
-    fn beyond_its_box(&mut self, qef: &Qef, lo: DVec3, hi: DVec3) -> Option<DVec3> {
+    fn beyond_its_box(&mut self, qef: &Qef, free: DVec3, lo: DVec3, hi: DVec3) -> Option<DVec3> {
         if !self.input.merging.on() {
             return None;
         }
         let grid = self.input.grid;
         let cell = grid.cell;
-        let free = qef.solve();
         let out = (lo - free).max(free - hi).max_element();
         let in_region =
             free.cmpge(DVec3::from(grid.origin)).all() && free.cmple(DVec3::from(grid.top)).all();
@@ -748,7 +746,7 @@ impl<S: Sampler> Merger<'_, '_, S> {
         let start = self.vertices.len();
         for p in 0..patches {
             let (v, held) = self.qefs[p].solve_held(lo, hi);
-            let v = if held {
+            let v = if held.is_some() {
                 self.onto_surface(v, lo, hi)
             } else {
                 v

@@ -121,6 +121,7 @@ impl Qef {
 
     /// The minimizer over all space (truncated, around the mass point); the mass point when
     /// nothing better is defined.
+    #[cfg(test)]
     pub fn solve(&self) -> DVec3 {
         if self.count == 0 {
             return self.origin;
@@ -134,18 +135,18 @@ impl Qef {
         self.solve_held(lo, hi).0
     }
 
-    /// [`Qef::solve_in`], and whether the box held the point back (the free minimizer lies
-    /// outside it, so the point is a compromise between planes that meet elsewhere).
-    pub fn solve_held(&self, lo: DVec3, hi: DVec3) -> (DVec3, bool) {
+    /// [`Qef::solve_in`], and, where the box held the point back, the free minimizer it
+    /// lies outside (so the point is a compromise between planes that meet elsewhere).
+    pub fn solve_held(&self, lo: DVec3, hi: DVec3) -> (DVec3, Option<DVec3>) {
         if self.count == 0 {
-            return (((lo + hi) * 0.5).clamp(lo, hi), false);
+            return (((lo + hi) * 0.5).clamp(lo, hi), None);
         }
         let (lo, hi) = (lo - self.origin, hi - self.origin);
         let m = self.mass / f64::from(self.count);
         let free = self.solve_fixed(m, [None; 3]);
         let inside = |x: DVec3| x.cmpge(lo).all() && x.cmple(hi).all();
         if inside(free) {
-            return (self.origin + free, false);
+            return (self.origin + free, None);
         }
         // The box's 26 faces, edges and corners: each axis held at lo, held at hi, or free.
         let mut best: Option<(f64, f64, DVec3)> = None;
@@ -177,7 +178,7 @@ impl Qef {
             Some((_, _, x)) => x,
             None => free.clamp(lo, hi),
         };
-        (self.origin + x, true)
+        (self.origin + x, Some(self.origin + free))
     }
 
     /// The truncated minimizer with some coordinates held (relative coordinates), around
