@@ -10,10 +10,13 @@
 //!
 //! A pattern's patches come from pairing, on each face, the face's sign-changing edges:
 //! two of them are paired; four (an ambiguous face, inside corners diagonal) are paired so
-//! that the inside corners are separated, each pair around one inside corner. That rule
-//! only looks at the face's corners, so both cells sharing a face pair its edges alike.
-//! Every sign-changing edge lies on two faces of the cell, so the pairing graph is
-//! 2-regular: its cycles are the patches.
+//! that the inside corners are separated, each pair around one inside corner, unless the
+//! face is *joined*: then each pair goes around one outside corner, and the solid runs
+//! across the face from one inside corner to the other. Which faces are joined is part of
+//! a cell's case ([`case_key`]); the mesher decides it from the face alone (the field at
+//! its middle, `leaf.rs`), so both cells sharing a face pair its edges alike. Every
+//! sign-changing edge lies on two faces of the cell, so the pairing graph is 2-regular:
+//! its cycles are the patches.
 
 use std::sync::LazyLock;
 
@@ -53,19 +56,38 @@ pub struct CellCase {
     pub lower_pair: [[u8; 12]; 3],
 }
 
-/// The case of every sign pattern: bit `c` of the index is set when corner `c` is inside.
-pub static CASES: LazyLock<[CellCase; 256]> = LazyLock::new(|| {
-    let mut out = [CellCase {
-        patches: 0,
-        edge_patch: [NONE; 12],
-        lower_ambiguous: [false; 3],
-        lower_pair: [[NONE; 12]; 3],
-    }; 256];
-    for (signs, case) in out.iter_mut().enumerate() {
-        *case = build_case(signs as u8);
+/// The case of every sign pattern and choice of joined faces, at [`case_key`]: the first
+/// 256 are the sign patterns with no face joined (bit `c` set when corner `c` is inside).
+pub static CASES: LazyLock<Vec<CellCase>> = LazyLock::new(|| {
+    (0..1usize << 14)
+        .map(|key| build_case(key as u8, (key >> 8) as u8))
+        .collect()
+});
+
+/// The bit of face (axis `n`, `side` 0 for the lower, 1 for the upper) in a set of faces.
+pub const fn face_bit(n: usize, side: usize) -> u8 {
+    1 << (2 * n + side)
+}
+
+/// Where the case of a cell with corner signs `signs` and joined faces `joined` (a set of
+/// [`face_bit`]s; bits of faces that are not ambiguous change nothing) is in [`CASES`].
+pub fn case_key(signs: u8, joined: u8) -> usize {
+    usize::from(signs) | usize::from(joined & 0x3f) << 8
+}
+
+/// The faces of a pattern with four sign-changing edges, as [`face_bit`]s.
+pub fn ambiguous_faces(signs: u8) -> u8 {
+    let mut out = 0;
+    for n in 0..3 {
+        for side in 0..2 {
+            let edges = face_edges(n, side);
+            if edges.iter().all(|&e| crosses(signs, e)) {
+                out |= face_bit(n, side);
+            }
+        }
     }
     out
-});
+}
 
 fn inside(signs: u8, corner: usize) -> bool {
     signs >> corner & 1 == 1
@@ -97,8 +119,9 @@ fn face_edges(n: usize, side: usize) -> [usize; 4] {
 }
 
 /// Pairs the sign-changing edges of one face. Returns the pairs (edge ids); one pair for
-/// a plain face, two for an ambiguous one, ordered by the lower inside corner.
-fn face_pairs(signs: u8, n: usize, side: usize) -> Vec<[usize; 2]> {
+/// a plain face, two for an ambiguous one, ordered by the lower inside corner (outside
+/// corner, when `joined`).
+fn face_pairs(signs: u8, n: usize, side: usize, joined: bool) -> Vec<[usize; 2]> {
     let edges = face_edges(n, side);
     let crossing: Vec<usize> = edges
         .iter()
@@ -108,9 +131,10 @@ fn face_pairs(signs: u8, n: usize, side: usize) -> Vec<[usize; 2]> {
     match crossing.len() {
         2 => vec![[crossing[0], crossing[1]]],
         4 => {
-            // Inside corners separated: each pair is the two face edges at one inside corner.
+            // Inside corners separated: each pair is the two face edges at one inside corner;
+            // joined, at one outside corner.
             let mut corners: Vec<usize> = (0..8)
-                .filter(|&c| (c >> n) & 1 == side && inside(signs, c))
+                .filter(|&c| (c >> n) & 1 == side && inside(signs, c) != joined)
                 .collect();
             corners.sort_unstable();
             corners
@@ -132,14 +156,14 @@ fn face_pairs(signs: u8, n: usize, side: usize) -> Vec<[usize; 2]> {
     }
 }
 
-fn build_case(signs: u8) -> CellCase {
+fn build_case(signs: u8, joined: u8) -> CellCase {
     // Each crossing edge gets its partner on each of its two faces.
     let mut partners: [[usize; 2]; 12] = [[usize::MAX; 2]; 12];
     let mut lower_ambiguous = [false; 3];
     let mut lower_pair = [[NONE; 12]; 3];
     for n in 0..3 {
         for side in 0..2 {
-            let pairs = face_pairs(signs, n, side);
+            let pairs = face_pairs(signs, n, side, joined & face_bit(n, side) != 0);
             if side == 0 && pairs.len() == 2 {
                 lower_ambiguous[n] = true;
                 for (k, pair) in pairs.iter().enumerate() {
@@ -190,8 +214,8 @@ mod tests {
 
     #[test]
     fn every_crossing_edge_has_a_patch_and_patches_are_cycles() {
-        for signs in 0..=255u8 {
-            let case = &CASES[signs as usize];
+        for key in 0..CASES.len() {
+            let (signs, case) = (key as u8, &CASES[key]);
             let mut sizes = vec![0; case.patches as usize];
             for e in 0..12 {
                 if crosses(signs, e) {
@@ -202,13 +226,44 @@ mod tests {
                 }
             }
             // A patch is a polygon: at least 3 crossings.
-            assert!(sizes.iter().all(|&s| s >= 3), "pattern {signs}: {sizes:?}");
+            assert!(sizes.iter().all(|&s| s >= 3), "case {key}: {sizes:?}");
         }
         assert_eq!(CASES[0].patches, 0);
         assert_eq!(CASES[255].patches, 0);
         assert_eq!(CASES[1].patches, 1);
         // Two diagonal corners across the body: two patches.
         assert_eq!(CASES[0b1000_0001].patches, 2);
+        // Two diagonal corners of the lower z face: two patches apart, one where the
+        // face joins them (the solid runs across it, and the patch around both).
+        let diagonal = 0b0000_1001;
+        assert_eq!(ambiguous_faces(diagonal), face_bit(2, 0));
+        assert_eq!(CASES[case_key(diagonal, 0)].patches, 2);
+        assert_eq!(CASES[case_key(diagonal, face_bit(2, 0))].patches, 1);
+        // A bit for a face that is not ambiguous changes nothing.
+        let plain = CASES[case_key(diagonal, face_bit(0, 0))];
+        assert_eq!(plain.edge_patch, CASES[diagonal as usize].edge_patch);
+    }
+
+    #[test]
+    fn a_joined_face_pairs_its_edges_around_its_outside_corners() {
+        // Lower z face with corners 0 and 3 inside: separated, the pairs meet at the
+        // inside corners 0 and 3; joined, at the outside corners 1 and 2.
+        let signs = 0b0000_1001;
+        let at = |pairs: Vec<[usize; 2]>| -> Vec<usize> {
+            pairs
+                .iter()
+                .map(|&[p, q]| {
+                    let (a, b) = edge_corners(p);
+                    let (c, d) = edge_corners(q);
+                    *[a, b]
+                        .iter()
+                        .find(|&&x| x == c || x == d)
+                        .expect("a shared corner")
+                })
+                .collect()
+        };
+        assert_eq!(at(face_pairs(signs, 2, 0, false)), vec![0, 3]);
+        assert_eq!(at(face_pairs(signs, 2, 0, true)), vec![1, 2]);
     }
 
     #[test]

@@ -25,7 +25,7 @@
 //! polygon's edge line, and a leaf edge on that line longer than a finest edge holds one
 //! crossing, so no other polygon can hold that diagonal.
 
-use super::cell::{CASES, edge_id, other_axes};
+use super::cell::{CASES, case_key, edge_id, other_axes};
 use super::leaf::{BlockOut, CANDIDATE, CellOut, NO_VERT};
 use super::octree::Grid;
 
@@ -105,7 +105,7 @@ impl Around<'_> {
             };
         }
         let patch = if self.cell.finest {
-            u32::from(CASES[self.cell.signs as usize].edge_patch[local_edge])
+            u32::from(CASES[case_key(self.cell.signs, self.cell.joined)].edge_patch[local_edge])
         } else {
             0
         };
@@ -210,7 +210,8 @@ pub fn polygons<'a>(
             let m = if step_axis == 0 { ab } else { ac };
             let o = &cells[owner];
             if o.cell.face[m] != NO_VERT {
-                let pair = CASES[o.cell.signs as usize].lower_pair[m][local_edge(AROUND[owner])];
+                let pair = CASES[case_key(o.cell.signs, o.cell.joined)].lower_pair[m]
+                    [local_edge(AROUND[owner])];
                 let vert = o.cell.face[m] + u32::from(pair.min(1));
                 poly.slots[poly.len as usize] = Slot {
                     r: Ref::Local {

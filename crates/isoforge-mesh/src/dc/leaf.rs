@@ -12,7 +12,7 @@
 
 use glam::DVec3;
 
-use super::cell::{CASES, NONE, edge_corners};
+use super::cell::{CASES, NONE, ambiguous_faces, case_key, edge_corners, face_bit, other_axes};
 use super::hermite::{Crossing, EdgeRef, corner_index};
 use super::octree::Grid;
 use super::qef::Qef;
@@ -85,6 +85,8 @@ pub struct CellOut {
     pub cell: u16,
     /// Corner sign pattern.
     pub signs: u8,
+    /// Its ambiguous faces that the solid runs across, as `cell::face_bit`s.
+    pub joined: u8,
     /// True when the cell is a leaf itself (one vertex per patch); false when it lies in a
     /// merged leaf (one vertex for all of it).
     pub finest: bool,
@@ -154,6 +156,8 @@ struct Surface {
     at: [usize; 3],
     /// Corner sign pattern.
     signs: u8,
+    /// Its ambiguous faces that the solid runs across ([`joined_faces`]).
+    joined: u8,
     /// Its crossings: `crossing_ids[first..first + count]`.
     first: u32,
     count: u8,
@@ -212,11 +216,12 @@ fn morton(at: [usize; 3], bits: u32) -> u32 {
     code
 }
 
-/// Merges a block's cells into leaves and places their vertices; fills `out`.
+/// Merges a block's cells into leaves and places their vertices; fills `out`. `root` is
+/// the whole field (see [`joined_faces`]), `local` the field narrowed to the block.
 pub fn build<S: Sampler>(
     sampler: &S,
     ev: &mut S::Evals,
-    local: &S::Local,
+    (root, local): (&S::Local, &S::Local),
     input: &BlockInput<'_>,
     scratch: &mut LeafScratch,
     out: &mut BlockOut,
@@ -264,10 +269,20 @@ pub fn build<S: Sampler>(
                         sc.crossing_ids.push(slot);
                     }
                 }
+                let at = [i, j, k].map(|v| v as i64);
+                let joined = joined_faces(
+                    sampler,
+                    ev,
+                    root,
+                    grid,
+                    [0, 1, 2].map(|a| base[a] + at[a]),
+                    pattern,
+                );
                 sc.surface.push(Surface {
                     code: morton([i, j, k], bits),
                     at: [i, j, k],
                     signs: pattern,
+                    joined,
                     first,
                     count: (sc.crossing_ids.len() as u32 - first) as u8,
                 });
@@ -322,7 +337,7 @@ pub fn build<S: Sampler>(
             .get(input.edge_slot[(e / 4) * n + ci] as usize)
     };
     for (cell, &(vert, finest)) in sc.surface.iter().zip(sc.leaf_of.iter()) {
-        let case = &CASES[cell.signs as usize];
+        let case = &CASES[case_key(cell.signs, cell.joined)];
         let mut face = [NO_VERT; 3];
         for (axis, slot) in face.iter_mut().enumerate() {
             if !case.lower_ambiguous[axis] {
@@ -368,6 +383,7 @@ pub fn build<S: Sampler>(
         out.cells.push(CellOut {
             cell: (i + b * (j + b * k)) as u16,
             signs: cell.signs,
+            joined: cell.joined,
             finest,
             vert,
             face,
@@ -444,6 +460,47 @@ fn onto_surface<S: Sampler>(
     x
 }
 
+/// The ambiguous faces of the cell with lowest corner `at` (lattice coordinates) and corner
+/// signs `signs` that the solid runs across: those whose middle the field puts inside.
+///
+/// Marching cubes' fixed rule keeps an ambiguous face's inside corners apart. Across a
+/// solid thinner than a cell that lies diagonally on a face (a gyroid's sheet, a wedge
+/// between a ball and a sheet), that pinches the solid in two at the face, and the
+/// face's vertices, each held between the crossings of both sides, sat half a cell inside
+/// it: on gyroid_sphere at depth 8 all 684 ambiguous faces had their middle inside, and
+/// 678 of them such a vertex more than a tenth of a cell off. The middle is read from the
+/// whole field (`root`), not the block's narrowed one, so both cells sharing the face,
+/// in one block or two, decide alike.
+fn joined_faces<S: Sampler>(
+    sampler: &S,
+    ev: &mut S::Evals,
+    root: &S::Local,
+    grid: &Grid,
+    at: [i64; 3],
+    signs: u8,
+) -> u8 {
+    let ambiguous = ambiguous_faces(signs);
+    let mut joined = 0;
+    for n in 0..3 {
+        for side in 0..2 {
+            let bit = face_bit(n, side);
+            if ambiguous & bit == 0 {
+                continue;
+            }
+            let mut lo = at;
+            lo[n] += side as i64;
+            let mut middle = grid.corner(lo);
+            let (b, c) = other_axes(n);
+            middle[b] += 0.5 * grid.cell;
+            middle[c] += 0.5 * grid.cell;
+            if sampler.grad(ev, root, middle)[0] < 0.0 {
+                joined |= bit;
+            }
+        }
+    }
+    joined
+}
+
 /// The square of the lower face of `axis` of the cell at local `at` of the block whose
 /// lowest cell is `base`, inset like a vertex box, as a box flat along `axis`.
 fn face_box(grid: &Grid, base: [i64; 3], at: [usize; 3], axis: usize) -> (DVec3, DVec3) {
@@ -458,7 +515,7 @@ fn face_box(grid: &Grid, base: [i64; 3], at: [usize; 3], axis: usize) -> (DVec3,
 /// this block and in fewer than three leaves (`leaf_at` holds a leaf id per cell), so the
 /// edge is no leaf's edge.
 fn inner_edge(leaf_at: &[u32], b: usize, at: [usize; 3], axis: usize) -> bool {
-    let (ab, ac) = super::cell::other_axes(axis);
+    let (ab, ac) = other_axes(axis);
     if at[ab] == 0 || at[ac] == 0 {
         return false;
     }
@@ -544,8 +601,10 @@ impl<S: Sampler> Merger<'_, '_, S> {
     /// A finest cell: a leaf candidate with one patch, or a leaf of its own with several.
     fn finest(&mut self, at: usize) -> Node {
         let cell = self.surface[at];
-        let case = &CASES[cell.signs as usize];
-        if case.patches == 1 {
+        let case = &CASES[case_key(cell.signs, cell.joined)];
+        // A joined face pairs its edges unlike the patterns `topology::collapsible` knows:
+        // such a cell never merges, and neither does its neighbour across the face.
+        if case.patches == 1 && cell.joined == 0 {
             let mut qef = Qef::new(self.origin);
             for &id in self.crossings(&cell) {
                 let x = &self.input.crossings[id as usize];
@@ -553,7 +612,8 @@ impl<S: Sampler> Merger<'_, '_, S> {
             }
             return Node::Leaf { qef, vertex: None };
         }
-        // Several patches: one vertex each, placed now (this cell never merges).
+        // Several patches, or a joined face: one vertex per patch, placed now (this cell
+        // never merges).
         let vert = self.vertices.len() as u32;
         self.place_patches(&cell);
         self.leaf_of[at] = (vert, true);
@@ -713,7 +773,7 @@ impl<S: Sampler> Merger<'_, '_, S> {
     /// One vertex per patch of a finest cell, each kept in the cell; all at their patches'
     /// mass points if two would coincide (distinct patches must stay distinct points).
     fn place_patches(&mut self, cell: &Surface) {
-        let case = &CASES[cell.signs as usize];
+        let case = &CASES[case_key(cell.signs, cell.joined)];
         let patches = case.patches as usize;
         for q in self.qefs.iter_mut().take(patches) {
             q.reset(self.origin);

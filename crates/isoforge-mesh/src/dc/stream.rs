@@ -194,6 +194,8 @@ fn contour_into<S: Sampler>(
     }
 
     let pool = EvalPool::new(sampler);
+    // The whole field, for what cells on both sides of a block face must read alike.
+    let root = sampler.root();
     let s = hermite::side(&grid);
     let words = (s * s * s).div_ceil(64);
     let mut bits: Vec<Option<Vec<u64>>> = vec![None; coords.len()];
@@ -281,7 +283,14 @@ fn contour_into<S: Sampler>(
                             crossings: &sc.crossings,
                             merging,
                         };
-                        leaf::build(sampler, guard.get(), local, &input, &mut sc.leaf, &mut out);
+                        leaf::build(
+                            sampler,
+                            guard.get(),
+                            (&root, local),
+                            &input,
+                            &mut sc.leaf,
+                            &mut out,
+                        );
                     }
                     report.tick();
                     (b, out)

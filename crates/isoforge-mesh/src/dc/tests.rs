@@ -166,8 +166,24 @@ fn corner_value(inside: bool, c: usize) -> f64 {
     }
 }
 
+/// Inside corners so deep that the middle of every ambiguous face is inside: every such
+/// face is joined (`leaf::joined_faces`), where [`corner_value`] leaves most apart.
+fn deep_corner_value(inside: bool, c: usize) -> f64 {
+    if inside {
+        -3.0 - 0.1 * c as f64
+    } else {
+        0.2 + 0.15 * c as f64
+    }
+}
+
 #[test]
 fn all_256_sign_patterns_of_a_cell_are_closed_manifold() {
+    for value in [corner_value, deep_corner_value] {
+        all_256_sign_patterns(value);
+    }
+}
+
+fn all_256_sign_patterns(corner_value: fn(bool, usize) -> f64) {
     for pattern in 0..256usize {
         let corners: Vec<([usize; 3], f64)> = (0..8)
             .map(|c| {
@@ -186,6 +202,12 @@ fn all_256_sign_patterns_of_a_cell_are_closed_manifold() {
 
 #[test]
 fn all_4096_sign_patterns_of_two_neighbouring_cells_are_closed_manifold() {
+    for value in [corner_value, deep_corner_value] {
+        all_4096_sign_patterns_of_two_cells(value);
+    }
+}
+
+fn all_4096_sign_patterns_of_two_cells(corner_value: fn(bool, usize) -> f64) {
     // Cells [7,8] and [8,9] along x, on the boundary between two blocks; then the same
     // along y and z.
     for axis in 0..3 {
