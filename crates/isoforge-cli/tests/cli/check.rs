@@ -331,6 +331,29 @@ fn a_twisted_vase_s_rim_holds_its_tolerance() {
     holds_its_tolerance_and_admesh_finds_nothing_to_fix("sweeps/twisted_vase.rhai");
 }
 
+/// The corner of the ripple tile's region, where the tile's top meets two of the region's
+/// walls: 1.75 tolerances off while a finest cell's vertex could go at most 0.6 of a cell
+/// beyond its box to where its planes meet; within a cell it holds.
+#[test]
+fn a_ripple_tile_s_region_corner_holds_its_tolerance() {
+    holds_its_tolerance_and_admesh_finds_nothing_to_fix("modern/ripple_tile.rhai");
+}
+
+/// The gyroid sheet cut to a ball, where the sheet crosses the lattice's faces diagonally
+/// and meets the ball in wedges thinner than a cell: with an ambiguous face's inside
+/// corners always kept apart, vertices on such faces sat half a cell inside the wedges
+/// (3.63 tolerances where the model is two cells wide, 5.42 everywhere). With each such
+/// face read at its middle the tolerance holds wherever the model is two cells wide.
+#[test]
+fn gyroid_sphere_holds_its_tolerance_where_it_is_two_cells_wide() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.stl");
+    let fixture = "bench/gyroid_sphere.rhai";
+    let (j, _) = checked_against_its_model(fixture, &out);
+    assert_eq!(j["tolerance_held_where_wide"], true, "{fixture}: {j}");
+    crate::sweeps::admesh_finds_nothing_to_fix(&out, fixture);
+}
+
 /// [`meshes_within_its_tolerance`], then ADMesh on the same file.
 fn holds_its_tolerance_and_admesh_finds_nothing_to_fix(fixture: &str) {
     let dir = tempfile::tempdir().unwrap();
@@ -342,6 +365,14 @@ fn holds_its_tolerance_and_admesh_finds_nothing_to_fix(fixture: &str) {
 /// Meshes a fixture at the default depth and tolerance into `out`, and asserts that
 /// `check --against` finds the tolerance held.
 fn meshes_within_its_tolerance(fixture: &str, out: &Path) {
+    let (j, status) = checked_against_its_model(fixture, out);
+    assert_eq!(j["tolerance_held"], true, "{fixture}: {j}");
+    assert_eq!(status, Some(0), "{fixture}");
+}
+
+/// Meshes a fixture at the default depth and tolerance into `out`, then runs `check
+/// --against` on it with that tolerance and depth: the report, and the exit status.
+fn checked_against_its_model(fixture: &str, out: &Path) -> (serde_json::Value, Option<i32>) {
     let out_s = out.display().to_string();
     let model = fixtures().join(fixture).display().to_string();
     let run = isoforge(&["mesh", &model, "-o", &out_s, "--json"]);
@@ -352,6 +383,7 @@ fn meshes_within_its_tolerance(fixture: &str, out: &Path) {
     );
     let made: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
     let tolerance = made["tolerance"].as_f64().expect("tolerance").to_string();
+    let depth = made["depth"].as_u64().expect("depth").to_string();
     let run = isoforge(&[
         "check",
         &out_s,
@@ -359,11 +391,12 @@ fn meshes_within_its_tolerance(fixture: &str, out: &Path) {
         &model,
         "--tolerance",
         &tolerance,
+        "--depth",
+        &depth,
         "--json",
     ]);
     let j: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
-    assert_eq!(j["tolerance_held"], true, "{model}: {j}");
-    assert_eq!(run.status.code(), Some(0), "{model}");
+    (j, run.status.code())
 }
 
 #[test]

@@ -9,8 +9,9 @@
 //!    from the gradient with fallbacks;
 //! 3. `leaf.rs` + `topology.rs` + `qef.rs`: a block's cells merged bottom up into leaves
 //!    where the QEF vertex stays within the tolerance and the topology does not change;
-//!    one vertex per leaf (per patch for a finest cell, with marching-cubes face pairing and
-//!    one fixed rule for ambiguous faces), kept in its box; `merge.rs` merges whole blocks
+//!    one vertex per leaf (per patch for a finest cell, with marching-cubes face pairing;
+//!    an ambiguous face joins its inside corners where the field puts its middle inside,
+//!    and such cells never merge), kept in its box; `merge.rs` merges whole blocks
 //!    further;
 //! 4. `contour.rs`: one polygon per sign-changing edge on the leaves' boundaries, split
 //!    into triangles so that the result is a 2-manifold (the module doc there has the

@@ -6,7 +6,8 @@
 //! parent edge at most once and meets each parent face in one curve. It is the idea of
 //! Ju et al. 2002 (§4.1, after Gerstner and Pajarola) and of Schaefer, Ju and Warren's
 //! manifold dual contouring (2007, the Euler-characteristic test), written for this
-//! mesher's face rule (an ambiguous face pairs its crossings around its inside corners):
+//! mesher's face rule (an ambiguous face pairs its crossings around its inside corners;
+//! a finest cell with a face joined the other way, `leaf.rs`, never merges):
 //!
 //! 1. every child has at most one patch, and the parent's own sign pattern has exactly one
 //!    patch and no ambiguous face, so the parent is one vertex with one ring around it;
