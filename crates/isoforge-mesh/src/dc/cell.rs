@@ -51,6 +51,8 @@ pub struct CellCase {
     pub edge_patch: [u8; 12],
     /// Per axis, whether the lower face of that axis is ambiguous (four crossings).
     pub lower_ambiguous: [bool; 3],
+    /// Its faces with four sign-changing edges, as [`face_bit`]s (all six sides).
+    pub ambiguous: u8,
     /// Per axis and edge, for the lower face of that axis when it is ambiguous: which of
     /// the face's two pairs (0 or 1) the edge belongs to, else [`NONE`].
     pub lower_pair: [[u8; 12]; 3],
@@ -73,20 +75,6 @@ pub const fn face_bit(n: usize, side: usize) -> u8 {
 /// [`face_bit`]s; bits of faces that are not ambiguous change nothing) is in [`CASES`].
 pub fn case_key(signs: u8, joined: u8) -> usize {
     usize::from(signs) | usize::from(joined & 0x3f) << 8
-}
-
-/// The faces of a pattern with four sign-changing edges, as [`face_bit`]s.
-pub fn ambiguous_faces(signs: u8) -> u8 {
-    let mut out = 0;
-    for n in 0..3 {
-        for side in 0..2 {
-            let edges = face_edges(n, side);
-            if edges.iter().all(|&e| crosses(signs, e)) {
-                out |= face_bit(n, side);
-            }
-        }
-    }
-    out
 }
 
 fn inside(signs: u8, corner: usize) -> bool {
@@ -161,9 +149,13 @@ fn build_case(signs: u8, joined: u8) -> CellCase {
     let mut partners: [[usize; 2]; 12] = [[usize::MAX; 2]; 12];
     let mut lower_ambiguous = [false; 3];
     let mut lower_pair = [[NONE; 12]; 3];
+    let mut ambiguous = 0;
     for n in 0..3 {
         for side in 0..2 {
             let pairs = face_pairs(signs, n, side, joined & face_bit(n, side) != 0);
+            if pairs.len() == 2 {
+                ambiguous |= face_bit(n, side);
+            }
             if side == 0 && pairs.len() == 2 {
                 lower_ambiguous[n] = true;
                 for (k, pair) in pairs.iter().enumerate() {
@@ -204,6 +196,7 @@ fn build_case(signs: u8, joined: u8) -> CellCase {
         patches,
         edge_patch,
         lower_ambiguous,
+        ambiguous,
         lower_pair,
     }
 }
@@ -236,7 +229,7 @@ mod tests {
         // Two diagonal corners of the lower z face: two patches apart, one where the
         // face joins them (the solid runs across it, and the patch around both).
         let diagonal = 0b0000_1001;
-        assert_eq!(ambiguous_faces(diagonal), face_bit(2, 0));
+        assert_eq!(CASES[diagonal as usize].ambiguous, face_bit(2, 0));
         assert_eq!(CASES[case_key(diagonal, 0)].patches, 2);
         assert_eq!(CASES[case_key(diagonal, face_bit(2, 0))].patches, 1);
         // A bit for a face that is not ambiguous changes nothing.

@@ -12,7 +12,7 @@
 
 use glam::DVec3;
 
-use super::cell::{CASES, NONE, ambiguous_faces, case_key, edge_corners, face_bit, other_axes};
+use super::cell::{CASES, NONE, case_key, edge_corners, face_bit, other_axes};
 use super::hermite::{Crossing, EdgeRef, corner_index};
 use super::octree::Grid;
 use super::qef::Qef;
@@ -273,15 +273,8 @@ pub fn build<S: Sampler>(
                         sc.crossing_ids.push(slot);
                     }
                 }
-                let at = [i, j, k].map(|v| v as i64);
-                let joined = joined_faces(
-                    sampler,
-                    ev,
-                    root,
-                    grid,
-                    [0, 1, 2].map(|a| base[a] + at[a]),
-                    pattern,
-                );
+                let lattice = [base[0] + i as i64, base[1] + j as i64, base[2] + k as i64];
+                let joined = joined_faces(sampler, ev, root, grid, lattice, pattern);
                 sc.surface.push(Surface {
                     code: morton([i, j, k], bits),
                     at: [i, j, k],
@@ -483,7 +476,7 @@ fn joined_faces<S: Sampler>(
     at: [i64; 3],
     signs: u8,
 ) -> u8 {
-    let ambiguous = ambiguous_faces(signs);
+    let ambiguous = CASES[usize::from(signs)].ambiguous;
     let mut joined = 0;
     for n in 0..3 {
         for side in 0..2 {
