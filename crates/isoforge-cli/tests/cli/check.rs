@@ -354,6 +354,49 @@ fn gyroid_sphere_holds_its_tolerance_where_it_is_two_cells_wide() {
     crate::sweeps::admesh_finds_nothing_to_fix(&out, fixture);
 }
 
+/// The Bezier sheet's corner at depth 6, where its flat edges meet at 59°: three of the
+/// mesher's vertices within 0.07 cells of each other, on one face, were joined to one
+/// vertex on the other, and their chords across the crease split onto points a few
+/// hundredths of a cell apart. New vertices kept 1/32 of a cell apart, only the first
+/// split was made (1.06 tolerances off); 1/128 apart, all are.
+#[test]
+fn a_bezier_sheet_s_corner_holds_its_tolerance() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.stl");
+    let fixture = "sweeps/lecture_bezier.rhai";
+    let (j, status) = checked_against_its_model_at(fixture, &out, Some("6"));
+    assert_eq!(j["tolerance_held"], true, "{fixture}: {j}");
+    assert_eq!(status, Some(0), "{fixture}");
+    crate::sweeps::admesh_finds_nothing_to_fix(&out, fixture);
+}
+
+/// The groove where stacked_sphere_circle's balls meet, at depth 6: the crease point of a
+/// chord across it lay a hair from the far corner of one of the chord's triangles, whose
+/// pieces were slivers facing anywhere; taken for folds, they kept the chord whole (1.77
+/// tolerances off).
+#[test]
+fn stacked_balls_groove_holds_its_tolerance() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.stl");
+    let fixture = "classic/stacked_sphere_circle.rhai";
+    let (j, status) = checked_against_its_model_at(fixture, &out, Some("6"));
+    assert_eq!(j["tolerance_held"], true, "{fixture}: {j}");
+    assert_eq!(status, Some(0), "{fixture}");
+}
+
+/// The same groove at the default depth, where the model is two cells wide: a fan of
+/// chords from one vertex across the groove, each spoke taking the split level of its far
+/// end, reached the level cap 2.6 cells long (1.14 tolerances off); long edges may go on.
+#[test]
+fn stacked_balls_hold_their_tolerance_where_they_are_two_cells_wide() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.stl");
+    let fixture = "classic/stacked_sphere_circle.rhai";
+    let (j, _) = checked_against_its_model(fixture, &out);
+    assert_eq!(j["tolerance_held_where_wide"], true, "{fixture}: {j}");
+    crate::sweeps::admesh_finds_nothing_to_fix(&out, fixture);
+}
+
 /// [`meshes_within_its_tolerance`], then ADMesh on the same file.
 fn holds_its_tolerance_and_admesh_finds_nothing_to_fix(fixture: &str) {
     let dir = tempfile::tempdir().unwrap();
@@ -373,9 +416,22 @@ fn meshes_within_its_tolerance(fixture: &str, out: &Path) {
 /// Meshes a fixture at the default depth and tolerance into `out`, then runs `check
 /// --against` on it with that tolerance and depth: the report, and the exit status.
 fn checked_against_its_model(fixture: &str, out: &Path) -> (serde_json::Value, Option<i32>) {
+    checked_against_its_model_at(fixture, out, None)
+}
+
+/// [`checked_against_its_model`] at `depth`, or the default depth.
+fn checked_against_its_model_at(
+    fixture: &str,
+    out: &Path,
+    depth: Option<&str>,
+) -> (serde_json::Value, Option<i32>) {
     let out_s = out.display().to_string();
     let model = fixtures().join(fixture).display().to_string();
-    let run = isoforge(&["mesh", &model, "-o", &out_s, "--json"]);
+    let mut args = vec!["mesh", &model, "-o", &out_s, "--json"];
+    if let Some(d) = depth {
+        args.extend(["--depth", d]);
+    }
+    let run = isoforge(&args);
     assert!(
         run.status.success(),
         "{model}: {}",

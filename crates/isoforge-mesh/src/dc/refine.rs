@@ -160,6 +160,13 @@ const MID_REACH: f64 = 0.5;
 /// makes splitting end: where the surface between two vertices is far from their chord (a
 /// thin wall seen edge-on), each new middle moved onto the surface can leave a chord as long
 /// as before, and levels bound that.
+///
+/// An edge at least [`LONG_CELLS`] long goes on to twice as many ([`Refiner::capped`]): a
+/// fan's spokes (the chords from one corner to the new vertices along its far side) take
+/// their far end's level without getting shorter, and on stacked_sphere_circle at depth 8
+/// a spoke 2.6 cells long across the groove was left at level 8, 1.14 tolerances off
+/// (session 41). Twice as many levels for every edge made spaceship worse (5.3 to 6.5
+/// tolerances; sessions 29 and 41): short edges at the cap are where splitting does not end.
 const MAX_SPLITS: u8 = 8;
 
 /// The mesher's triangles held at most while they wait for their neighbours. The mesh
@@ -181,6 +188,14 @@ const FOLD_COS: f64 = -0.9;
 /// tolerances and spheres_chain from 0.8 to 2.0). Not looked at, a ball under two cells
 /// wide, clipped by the region's corner and collapsed to six triangles, was split inside out.
 const FOLD_AREA: f64 = 0.25;
+
+/// A piece lower than this share of the tolerance (twice its area over its longest side) is
+/// never a fold: all of it lies that near its longest side, so whichever way it faces, it
+/// cannot take the mesh farther from the surface than that. Where a crease point lands a
+/// hair from the far corner of one side (on lecture_bezier's flat edges, 0.02 cells from
+/// it), that side's pieces are such slivers, facing anywhere; counted as folds, they kept
+/// the chord across the crease whole, 1.75 tolerances off (session 41).
+const SLIVER_SHARE: f64 = 0.25;
 
 /// A triangle facing against the field at its centre by more than this (cosine, 96°) is a
 /// fold already, and its pieces are not checked. One nearer edge-on is not: on the ball of
@@ -218,7 +233,14 @@ const FAR_CREASE: f64 = 0.75;
 /// Two new vertices are kept at least this many cells apart: where they land a hair apart
 /// (two edges' splits onto one straight crease), every way of joining the pieces has a
 /// needle, whose normal single-precision readers get wrong (ADMesh "fixed" them).
-const APART: f64 = 1.0 / 32.0;
+///
+/// 1/32 until session 41. But a fan's chords across one crease split at points a few
+/// hundredths of a cell apart (three mesher vertices within 0.07 cells of each other at
+/// lecture_bezier's sheet corner, joined to one vertex across the crease), and 1/32
+/// refused all but the first: with [`SLIVER_SHARE`], 1/128 took sinus_sphere from 4.43 to
+/// 2.66 tolerances at depth 8 and lecture_bezier to 0.80, where 1/64 left sinus_sphere at
+/// 4.73; ADMesh fixes nothing on any fixture's mesh at depths 6, 8 and 9.
+const APART: f64 = 1.0 / 128.0;
 
 /// A new vertex nearer an end of its edge than this share of the edge is not made.
 const NEAR_END: f64 = 0.1;
@@ -672,7 +694,7 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         let len = (pb - pa).length();
         let level = va.level.max(vb.level);
         let mid = (pa + pb) * 0.5;
-        if level >= MAX_SPLITS
+        if Self::capped(level, len / self.cell)
             || va.stray
             || vb.stray
             || len < SHORTEST * self.cell
@@ -760,6 +782,12 @@ impl<'a, S: Sampler> Refiner<'a, S> {
         self.remember_near(m, q);
         self.splits.insert(key, (m, 0));
         Ok(Some(m))
+    }
+
+    /// Whether an edge `cells` long with an end at split `level` is split no further
+    /// ([`MAX_SPLITS`]).
+    fn capped(level: u8, cells: f64) -> bool {
+        level >= 2 * MAX_SPLITS || (level >= MAX_SPLITS && cells < LONG_CELLS)
     }
 
     /// The grid square of `p` for [`Refiner::near`].
@@ -858,9 +886,14 @@ impl<'a, S: Sampler> Refiner<'a, S> {
                 .map(|[(u, nu), (v, nv), (w, nw)]| ((v - u).cross(w - u), u + v + w, [nu, nv, nw]));
             let whole = (b - a).cross(c - a);
             // A small piece is a fold only where it also faces against every corner's
-            // normal: at a crease the field at its centre may be the other face's.
-            let exempt = pieces.map(|(f, _, normals)| {
-                f.length() * 0.5 < smallest && normals.iter().any(|m| f.dot(*m) >= 0.0)
+            // normal: at a crease the field at its centre may be the other face's. A
+            // sliver never is.
+            let sliver = self.tolerance * SLIVER_SHARE;
+            let exempt = [[a, q, c], [q, b, c]].map(|corners| height(corners) < sliver);
+            let exempt = [0, 1].map(|k| {
+                let (f, _, normals) = pieces[k];
+                exempt[k]
+                    || (f.length() * 0.5 < smallest && normals.iter().any(|m| f.dot(*m) >= 0.0))
             });
             if exempt.iter().all(|&e| e) {
                 continue;
@@ -1057,18 +1090,29 @@ fn inverts_the_wedge(sides: &[[(DVec3, DVec3); 3]], q: DVec3, outward: f64) -> b
     let Some([a, b, c, d]) = wedge_of(sides) else {
         return false;
     };
-    let thin = |[u, v, w]: [DVec3; 3]| {
-        let longest2 = [v - u, w - v, u - w]
-            .map(DVec3::length_squared)
-            .into_iter()
-            .fold(0.0, f64::max);
-        (v - u).cross(w - u).length() < THIN * longest2
-    };
+    let thin = |corners: [DVec3; 3]| height(corners) < THIN * longest_side(corners);
     if outward <= 0.0 || thin([a, b, c]) || thin([b, a, d]) {
         return false;
     }
     let (change, wedge) = split_volumes([a, b, c, d], q);
     change < 0.0 && wedge + change < 0.0
+}
+
+/// The longest side of triangle `corners`.
+fn longest_side([u, v, w]: [DVec3; 3]) -> f64 {
+    (v - u).length().max((w - v).length()).max((u - w).length())
+}
+
+/// The height of triangle `corners` over its longest side (twice its area over that side);
+/// zero for a point.
+fn height(corners: [DVec3; 3]) -> f64 {
+    let [u, v, w] = corners;
+    let longest = longest_side(corners);
+    if longest > 0.0 {
+        (v - u).cross(w - u).length() / longest
+    } else {
+        0.0
+    }
 }
 
 /// The edge `a b` and its two sides' far corners `c` and `d`: the first side, and the first
@@ -1319,7 +1363,7 @@ mod tests {
                 closest = closest.min((*a - *b).length());
             }
         }
-        assert!(closest >= cell / 32.0 * 0.999, "{closest} apart");
+        assert!(closest >= cell * super::APART * 0.999, "{closest} apart");
         assert!(
             check(&out).is_closed_manifold(),
             "{:?}",
