@@ -29,7 +29,7 @@
 //!
 //! No split may fold the mesh: a place to split is passed over when a piece of either
 //! triangle beside the edge would face against the field ([`FOLD_COS`]) where the triangle
-//! did not. So a triangle of the mesher's is held until the triangles across its edges that
+//! did not (a sliver lower than [`SLIVER_SHARE`] of the tolerance aside). So a triangle of the mesher's is held until the triangles across its edges that
 //! may split have come (they come slab by slab, so within a slab or two; at most
 //! [`HELD_MAX`] are held), and the pieces' new edges record the triangles beside them too.
 //! Without it, on a cube turned off the lattice (a random turn; the fixture's 30° and 20°
@@ -889,10 +889,10 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             // normal: at a crease the field at its centre may be the other face's. A
             // sliver never is.
             let sliver = self.tolerance * SLIVER_SHARE;
-            let exempt = [[a, q, c], [q, b, c]].map(|corners| height(corners) < sliver);
+            let corners = [[a, q, c], [q, b, c]];
             let exempt = [0, 1].map(|k| {
                 let (f, _, normals) = pieces[k];
-                exempt[k]
+                height(corners[k]) < sliver
                     || (f.length() * 0.5 < smallest && normals.iter().any(|m| f.dot(*m) >= 0.0))
             });
             if exempt.iter().all(|&e| e) {
