@@ -297,7 +297,8 @@ fn a_drilled_block_holds_its_tolerance_and_admesh_finds_nothing_to_fix() {
 #[test]
 fn a_threaded_rod_s_tooth_tips_hold_their_tolerance() {
     let dir = tempfile::tempdir().unwrap();
-    meshes_within_its_tolerance("sweeps/threaded_rod.rhai", &dir.path().join("rod.stl"));
+    let out = dir.path().join("rod.stl");
+    meshes_within_its_tolerance("sweeps/threaded_rod.rhai", &out, None);
 }
 
 /// The boat's bow ends in a flat cap in the plane x = 0. A mesher's vertex in that plane,
@@ -346,12 +347,7 @@ fn a_ripple_tile_s_region_corner_holds_its_tolerance() {
 /// face read at its middle the tolerance holds wherever the model is two cells wide.
 #[test]
 fn gyroid_sphere_holds_its_tolerance_where_it_is_two_cells_wide() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out.stl");
-    let fixture = "bench/gyroid_sphere.rhai";
-    let (j, _) = checked_against_its_model(fixture, &out);
-    assert_eq!(j["tolerance_held_where_wide"], true, "{fixture}: {j}");
-    crate::sweeps::admesh_finds_nothing_to_fix(&out, fixture);
+    holds_its_tolerance_where_wide_and_admesh_finds_nothing_to_fix("bench/gyroid_sphere.rhai");
 }
 
 /// The Bezier sheet's corner at depth 6, where its flat edges meet at 59°: three of the
@@ -364,9 +360,7 @@ fn a_bezier_sheet_s_corner_holds_its_tolerance() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out.stl");
     let fixture = "sweeps/lecture_bezier.rhai";
-    let (j, status) = checked_against_its_model_at(fixture, &out, Some("6"));
-    assert_eq!(j["tolerance_held"], true, "{fixture}: {j}");
-    assert_eq!(status, Some(0), "{fixture}");
+    meshes_within_its_tolerance(fixture, &out, Some("6"));
     crate::sweeps::admesh_finds_nothing_to_fix(&out, fixture);
 }
 
@@ -378,10 +372,7 @@ fn a_bezier_sheet_s_corner_holds_its_tolerance() {
 fn stacked_balls_groove_holds_its_tolerance() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out.stl");
-    let fixture = "classic/stacked_sphere_circle.rhai";
-    let (j, status) = checked_against_its_model_at(fixture, &out, Some("6"));
-    assert_eq!(j["tolerance_held"], true, "{fixture}: {j}");
-    assert_eq!(status, Some(0), "{fixture}");
+    meshes_within_its_tolerance("classic/stacked_sphere_circle.rhai", &out, Some("6"));
 }
 
 /// The same groove at the default depth, where the model is two cells wide: a fan of
@@ -389,38 +380,41 @@ fn stacked_balls_groove_holds_its_tolerance() {
 /// end, reached the level cap 2.6 cells long (1.14 tolerances off); long edges may go on.
 #[test]
 fn stacked_balls_hold_their_tolerance_where_they_are_two_cells_wide() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out.stl");
-    let fixture = "classic/stacked_sphere_circle.rhai";
-    let (j, _) = checked_against_its_model(fixture, &out);
-    assert_eq!(j["tolerance_held_where_wide"], true, "{fixture}: {j}");
-    crate::sweeps::admesh_finds_nothing_to_fix(&out, fixture);
+    holds_its_tolerance_where_wide_and_admesh_finds_nothing_to_fix(
+        "classic/stacked_sphere_circle.rhai",
+    );
 }
 
 /// [`meshes_within_its_tolerance`], then ADMesh on the same file.
 fn holds_its_tolerance_and_admesh_finds_nothing_to_fix(fixture: &str) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out.stl");
-    meshes_within_its_tolerance(fixture, &out);
+    meshes_within_its_tolerance(fixture, &out, None);
     crate::sweeps::admesh_finds_nothing_to_fix(&out, fixture);
 }
 
-/// Meshes a fixture at the default depth and tolerance into `out`, and asserts that
-/// `check --against` finds the tolerance held.
-fn meshes_within_its_tolerance(fixture: &str, out: &Path) {
-    let (j, status) = checked_against_its_model(fixture, out);
+/// At the default depth, `check --against` finds the tolerance held where the model is at
+/// least two cells wide, and ADMesh finds nothing to fix.
+fn holds_its_tolerance_where_wide_and_admesh_finds_nothing_to_fix(fixture: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.stl");
+    let (j, _) = checked_against_its_model(fixture, &out, None);
+    assert_eq!(j["tolerance_held_where_wide"], true, "{fixture}: {j}");
+    crate::sweeps::admesh_finds_nothing_to_fix(&out, fixture);
+}
+
+/// Meshes a fixture at `depth` (or the default) and the default tolerance into `out`, and
+/// asserts that `check --against` finds the tolerance held.
+fn meshes_within_its_tolerance(fixture: &str, out: &Path, depth: Option<&str>) {
+    let (j, status) = checked_against_its_model(fixture, out, depth);
     assert_eq!(j["tolerance_held"], true, "{fixture}: {j}");
     assert_eq!(status, Some(0), "{fixture}");
 }
 
-/// Meshes a fixture at the default depth and tolerance into `out`, then runs `check
-/// --against` on it with that tolerance and depth: the report, and the exit status.
-fn checked_against_its_model(fixture: &str, out: &Path) -> (serde_json::Value, Option<i32>) {
-    checked_against_its_model_at(fixture, out, None)
-}
-
-/// [`checked_against_its_model`] at `depth`, or the default depth.
-fn checked_against_its_model_at(
+/// Meshes a fixture at `depth` (or the default) and the default tolerance into `out`, then
+/// runs `check --against` on it with that tolerance and depth: the report, and the exit
+/// status.
+fn checked_against_its_model(
     fixture: &str,
     out: &Path,
     depth: Option<&str>,
