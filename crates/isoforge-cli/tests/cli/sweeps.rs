@@ -65,8 +65,21 @@ fn admesh_figures(stl: &Path) -> Vec<(String, f64)> {
 
 /// admesh's figures for `stl`, after checking it is one part with nothing to fix.
 pub fn admesh_finds_nothing_to_fix(stl: &Path, name: &str) -> Vec<(String, f64)> {
+    admesh_finds_nothing_to_fix_in_parts(stl, name, 1)
+}
+
+/// admesh's figures for `stl`, after checking it is `parts` parts with nothing to fix.
+pub fn admesh_finds_nothing_to_fix_in_parts(
+    stl: &Path,
+    name: &str,
+    parts: u32,
+) -> Vec<(String, f64)> {
     let figures = admesh_figures(stl);
-    assert_eq!(figure(&figures, "Number of parts"), 1.0, "{name}");
+    assert_eq!(
+        figure(&figures, "Number of parts"),
+        f64::from(parts),
+        "{name}"
+    );
     for label in [
         "Total disconnected facets",
         "Degenerate facets",

@@ -17,13 +17,15 @@
 //!    into triangles so that the result is a 2-manifold (the module doc there has the
 //!    argument);
 //! 5. `stream.rs`: the schedule, slab by slab along z, polygons handed on as soon as
-//!    they are known; with more than one worker, stages 6 to 8 and the sink take them on
+//!    they are known; with more than one worker, stages 6 to 9 and the sink take them on
 //!    a thread of their own, in order (`pipe.rs`);
 //! 6. `decimate.rs`: with a tolerance, edge collapses checked against the field (on
 //!    chunks of 65,536 triangles, for as long as collapsing pays);
 //! 7. `refine.rs`: with a tolerance, vertices off the surface moved onto it and triangles
 //!    that cut a crease split along it;
-//! 8. `shells.rs`: with a tolerance, a small closed part that came out inside out turned
+//! 8. `flips.rs`: with a tolerance, an edge that strays from the surface turned to the
+//!    other diagonal of its two triangles where that one keeps nearer;
+//! 9. `shells.rs`: with a tolerance, a small closed part that came out inside out turned
 //!    the right way out, then the [`MeshSink`].
 //!
 //! Everything samples the field clipped to the region (`isoforge_field::ClippedField`:
@@ -33,6 +35,7 @@ pub mod cell;
 pub mod contour;
 pub mod decimate;
 pub mod estimate;
+pub mod flips;
 pub mod hermite;
 pub mod leaf;
 pub mod merge;

@@ -16,6 +16,7 @@ use rayon::prelude::*;
 
 use super::contour::{self, Polygon, Ref};
 use super::decimate::{self, Decimator};
+use super::flips::Flipper;
 use super::hermite::{self, Crossing, EdgeRef, Scratch};
 use super::leaf::{self, BlockInput, BlockOut, LeafScratch, Merging, NO_VERT};
 use super::merge::{AboveBlocks, Resolved};
@@ -132,12 +133,13 @@ fn behind<S: Sampler>(
         .effective_tolerance()
         .min(settings.cell() * decimate::MAX_CELLS);
     let mut shells = SmallShells::new(sampler, settings.cell(), sink);
+    let mut flipper = Flipper::new(sampler, tolerance, settings.cell(), &mut shells);
     let mut refiner = Refiner::new(
         sampler,
         tolerance,
         &settings.bounds,
         settings.cell(),
-        &mut shells,
+        &mut flipper,
     );
     let mut decimator = Decimator::new(sampler, tolerance, settings.cell(), &mut refiner);
     feed(&mut decimator)?;
@@ -148,6 +150,8 @@ fn behind<S: Sampler>(
             .thin_triangles
             .fetch_add(refiner.thin_triangles, Ordering::Relaxed);
     }
+    drop(refiner);
+    flipper.finish().map_err(MeshError::Write)?;
     shells.finish().map_err(MeshError::Write)?;
     if let Some(notes) = &settings.notes {
         notes
