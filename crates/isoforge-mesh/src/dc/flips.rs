@@ -284,6 +284,12 @@ impl<S: Sampler> MeshSink for Flipper<'_, S> {
     }
 
     fn triangle(&mut self, t: [u32; 3], _corners: [[f32; 3]; 3]) -> io::Result<()> {
+        if t.iter().any(|&v| v as usize >= self.verts.len()) {
+            return Err(io::Error::other(format!(
+                "triangle {t:?} before its vertices ({} so far)",
+                self.verts.len()
+            )));
+        }
         self.tris.push(t);
         if self.tris.len() >= CHUNK {
             self.flush()?;
@@ -413,6 +419,16 @@ mod tests {
         let report = check(&mesh);
         assert!(report.is_closed_manifold(), "{:?}", mesh.triangles);
         assert!(report.volume > 0.0, "{report:?}");
+    }
+
+    #[test]
+    fn a_triangle_before_its_vertices_is_an_error() {
+        let sampler = cube();
+        let mut out = Mesh::default();
+        let mut flipper = Flipper::new(&sampler, 0.01, 0.05, &mut out);
+        flipper.vertex(A).unwrap();
+        let e = flipper.triangle([0, 1, 2], [[0.0; 3]; 3]).unwrap_err();
+        assert!(e.to_string().contains("before its vertices"), "{e}");
     }
 
     #[test]
