@@ -350,6 +350,7 @@ fn gyroid_sphere_holds_its_tolerance_where_it_is_two_cells_wide() {
     holds_its_tolerance_where_wide_and_admesh_finds_nothing_to_fix(
         "bench/gyroid_sphere.rhai",
         None,
+        1,
     );
 }
 
@@ -386,6 +387,7 @@ fn stacked_balls_hold_their_tolerance_where_they_are_two_cells_wide() {
     holds_its_tolerance_where_wide_and_admesh_finds_nothing_to_fix(
         "classic/stacked_sphere_circle.rhai",
         None,
+        1,
     );
 }
 
@@ -396,12 +398,11 @@ fn stacked_balls_hold_their_tolerance_where_they_are_two_cells_wide() {
 /// (At depth 7 the example comes out as four parts, with the turns or without.)
 #[test]
 fn offset_shell_holds_its_tolerance_where_wide_at_depth_7() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out.stl");
-    let fixture = "../docs/examples/modern/offset_shell.rhai";
-    let (j, _) = checked_against_its_model(fixture, &out, Some("7"));
-    assert_eq!(j["tolerance_held_where_wide"], true, "{fixture}: {j}");
-    crate::sweeps::admesh_finds_nothing_to_fix_in_parts(&out, fixture, 4);
+    holds_its_tolerance_where_wide_and_admesh_finds_nothing_to_fix(
+        "../docs/examples/modern/offset_shell.rhai",
+        Some("7"),
+        4,
+    );
 }
 
 /// [`meshes_within_its_tolerance`], then ADMesh on the same file.
@@ -413,16 +414,17 @@ fn holds_its_tolerance_and_admesh_finds_nothing_to_fix(fixture: &str) {
 }
 
 /// At `depth` (or the default), `check --against` finds the tolerance held where the model
-/// is at least two cells wide, and ADMesh finds nothing to fix.
+/// is at least two cells wide, and ADMesh finds `parts` parts and nothing to fix.
 fn holds_its_tolerance_where_wide_and_admesh_finds_nothing_to_fix(
     fixture: &str,
     depth: Option<&str>,
+    parts: u32,
 ) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out.stl");
     let (j, _) = checked_against_its_model(fixture, &out, depth);
     assert_eq!(j["tolerance_held_where_wide"], true, "{fixture}: {j}");
-    crate::sweeps::admesh_finds_nothing_to_fix(&out, fixture);
+    crate::sweeps::admesh_finds_nothing_to_fix_in_parts(&out, fixture, parts);
 }
 
 /// Meshes a fixture at `depth` (or the default) and the default tolerance into `out`, and

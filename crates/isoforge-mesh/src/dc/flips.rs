@@ -31,6 +31,7 @@ use std::io;
 use glam::DVec3;
 
 use super::narrowed::Narrowed;
+use super::refine::{height, longest_side};
 use super::sampler::Sampler;
 use crate::int_hash::IntMap;
 use crate::sink::MeshSink;
@@ -312,9 +313,7 @@ fn normal(a: DVec3, b: DVec3, c: DVec3) -> Option<DVec3> {
 
 /// Whether triangle (a, b, c) is lower than [`THINNEST`] of its longest side.
 fn needle(a: DVec3, b: DVec3, c: DVec3) -> bool {
-    let longest = (b - a).length().max((c - b).length()).max((a - c).length());
-    let twice_area = (b - a).cross(c - a).length();
-    twice_area <= THINNEST * longest * longest
+    height([a, b, c]) <= THINNEST * longest_side([a, b, c])
 }
 
 /// Whether every triangle around vertex `v` is in the chunk: walking around `v` from

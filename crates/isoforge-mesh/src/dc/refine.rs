@@ -1099,13 +1099,13 @@ fn inverts_the_wedge(sides: &[[(DVec3, DVec3); 3]], q: DVec3, outward: f64) -> b
 }
 
 /// The longest side of triangle `corners`.
-fn longest_side([u, v, w]: [DVec3; 3]) -> f64 {
+pub(super) fn longest_side([u, v, w]: [DVec3; 3]) -> f64 {
     (v - u).length().max((w - v).length()).max((u - w).length())
 }
 
 /// The height of triangle `corners` over its longest side (twice its area over that side);
 /// zero for a point.
-fn height(corners: [DVec3; 3]) -> f64 {
+pub(super) fn height(corners: [DVec3; 3]) -> f64 {
     let [u, v, w] = corners;
     let longest = longest_side(corners);
     if longest > 0.0 {
