@@ -3,7 +3,8 @@
 --against` whether the tolerance held, by hand.
 
     cargo build --release -p isoforge-cli
-    python3 tools/tolerance-sweep.py [--depth N] [--bin PATH] [--only NAME ...]
+    python3 tools/tolerance-sweep.py [--depth N] [--finer K | --max-depth M] [--bin PATH]
+                                     [--only NAME ...]
 
 The fixtures are the 42 model scripts of fixtures/{bench,classic,flat,modern,sweeps,slice}
 (prospero and tanglecube, which have no region of their own, are left out), then the six
@@ -17,6 +18,12 @@ where wide. `--only` keeps the models whose name contains one of the words given
 
 The issue's criterion is "held everywhere" on every fixture (docs/meshing.md, "What the
 tolerance promises" and "Not done").
+
+`--finer K` meshes each model K levels deeper than `--depth` but with depth N's default
+tolerance in millimetres (`--tolerance T`), and checks it against that tolerance: what a
+lattice sampled finer would give at the tolerance a user asked for at depth N.
+`--max-depth M` meshes with `isoforge mesh --max-depth M` (meshed again finer while the
+tolerance is missed); the depth column says where each model stopped.
 """
 
 import argparse
@@ -54,15 +61,22 @@ def run_json(args):
         sys.exit("no JSON from %s:\n%s" % (" ".join(args), out.stderr))
 
 
-def sweep_one(binary, path, extra, depth, workdir):
+def sweep_one(binary, path, extra, depth, finer, max_depth, workdir):
     stl = os.path.join(workdir, "mesh.stl")
-    mesh = run_json([binary, "mesh", path, *extra, "--depth", str(depth), "--json", "-o", stl])
+    deeper = ["--max-depth", str(max_depth)] if max_depth else []
+    mesh = run_json([binary, "mesh", path, *extra, "--depth", str(depth), *deeper,
+                     "--json", "-o", stl])
     tol = mesh["tolerance"]
+    if finer:
+        mesh = run_json([binary, "mesh", path, *extra, "--depth", str(depth + finer),
+                         "--tolerance", repr(tol), "--json", "-o", stl])
     check = run_json([binary, "check", stl, "--against", path, *extra,
                       "--tolerance", repr(tol), "--depth", str(depth), "--json"])
     os.remove(stl)
     return {
         "triangles": mesh["triangles"],
+        "seconds": mesh["seconds"],
+        "depth": mesh["depth"],
         "max": check["max_deviation"] / tol,
         "wide": check["max_deviation_where_wide"] / tol,
         "narrow_points": check["points_beyond_where_narrow"],
@@ -76,24 +90,28 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--depth", type=int, default=8)
     ap.add_argument("--bin", default=os.path.join(ROOT, "target", "release", "isoforge"))
+    ap.add_argument("--finer", type=int, default=0)
+    ap.add_argument("--max-depth", type=int, default=0)
     ap.add_argument("--only", nargs="*", default=[])
     a = ap.parse_args()
     if not os.access(a.bin, os.X_OK):
         sys.exit("%s is not there: cargo build --release -p isoforge-cli" % a.bin)
     tally = {}
-    print("| model | triangles | largest, tolerances | where wide | points beyond where narrow |")
-    print("| --- | --- | --- | --- | --- |")
+    print("| model | depth | triangles | seconds | largest, tolerances | where wide "
+          "| points beyond where narrow |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
     with tempfile.TemporaryDirectory() as workdir:
         for group, path, extra in models():
             name = os.path.relpath(path, ROOT)
             if a.only and not any(w in name for w in a.only):
                 continue
-            r = sweep_one(a.bin, path, extra, a.depth, workdir)
+            r = sweep_one(a.bin, path, extra, a.depth, a.finer, a.max_depth, workdir)
             mark = "" if r["held"] else (" (held where wide)" if r["held_wide"] else " (missed)")
             if not r["closed"]:
                 mark += " NOT CLOSED AND MANIFOLD"
-            print("| %s | %d | %.3f%s | %.3f | %d |" % (
-                name, r["triangles"], r["max"], mark, r["wide"], r["narrow_points"]))
+            print("| %s | %d | %d | %.2f | %.3f%s | %.3f | %d |" % (
+                name, r["depth"], r["triangles"], r["seconds"], r["max"], mark, r["wide"],
+                r["narrow_points"]))
             sys.stdout.flush()
             t = tally.setdefault(group, [0, 0, 0])
             t[0] += 1

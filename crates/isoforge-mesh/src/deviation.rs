@@ -27,18 +27,27 @@
 //! assert!(d.max < 0.05 && d.mean <= d.max);
 //! ```
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use isoforge_field::{BatchEval, ClippedField, GradEval};
 use rayon::prelude::*;
 
 use crate::mesh::Mesh;
 
 mod narrow;
+mod stream;
+
+pub use stream::DeviationSink;
 
 /// Points per batch: large enough for the batch evaluator to pay off.
 const CHUNK: usize = 4096;
-/// Bisection rounds on a bracket: 2^-40 of the bracket, below f32's resolution.
-const BISECTIONS: usize = 40;
+/// Bisection rounds on a bracket along the gradient line: 2^-24 of a bracket a few
+/// first-order distances long (a cell at most), far below f32's resolution of a vertex's
+/// coordinates. Each round is a field evaluation per point, the bulk of the measure's
+/// cost: 40 rounds took about a quarter more time (spiky_ball at depth 8) for digits no
+/// f32 mesh has.
+const BISECTIONS: usize = 24;
+/// Bisection rounds on a bracket found searching around a point (`refine_largest`).
+const AROUND_BISECTIONS: usize = 20;
 /// How far along the gradient line to look for the surface, in multiples of the
 /// first-order estimate (a smooth field's surface is found well within 2).
 const SEARCH: [f64; 3] = [1.25, 2.0, 4.0];
@@ -125,23 +134,10 @@ pub fn deviation_where_wide(
             ..Deviation::default()
         };
     }
-    // Sample points, seven per triangle: corners, edge middles, centroid.
     let points: Vec<[f64; 3]> = mesh
         .triangles
         .par_iter()
-        .flat_map_iter(|&t| {
-            let [a, b, c] = t.map(|i| Vec3::from(mesh.vertices[i as usize]).as_dvec3());
-            [
-                a,
-                b,
-                c,
-                (a + b) * 0.5,
-                (b + c) * 0.5,
-                (c + a) * 0.5,
-                (a + b + c) / 3.0,
-            ]
-            .map(|p| p.to_array())
-        })
+        .flat_map_iter(|&t| sample_points(mesh.corners(t)))
         .collect();
     let mut found: Vec<Found> = points
         .par_chunks(CHUNK)
@@ -149,57 +145,23 @@ pub fn deviation_where_wide(
         .collect();
     let beyond_exact = refine_largest(field, &points, &mut found, tolerance);
     let narrow = narrow::beyond_and_narrow(field, &points, &found, tolerance, width);
-    // Degree-3 rule on a triangle: corners 3/60, edge middles 8/60, centroid 27/60.
-    const WEIGHTS: [f64; 7] = [
-        3.0 / 60.0,
-        3.0 / 60.0,
-        3.0 / 60.0,
-        8.0 / 60.0,
-        8.0 / 60.0,
-        8.0 / 60.0,
-        27.0 / 60.0,
-    ];
     let mut out = Deviation {
-        samples: found.len(),
         beyond_exact,
         ..Deviation::default()
     };
-    let (mut weighted, mut area, mut beyond, mut beyond_narrow) = (0.0, 0.0, 0.0, 0.0);
+    let mut sums = Sums::default();
     for (ti, &t) in mesh.triangles.iter().enumerate() {
-        let [a, b, c] = mesh.corners(t);
-        let twice = (b - a).cross(c - a).length();
-        let mut sum = 0.0;
-        for (k, &weight) in WEIGHTS.iter().enumerate() {
-            let i = 7 * ti + k;
-            let Found { d, estimated, .. } = found[i];
-            out.estimated += usize::from(estimated);
-            sum += weight * d;
-            if d > tolerance {
-                out.points_beyond += 1;
-                beyond += weight * twice;
-            }
-            if d > out.max {
-                out.max = d;
-                out.at = points[i];
-            }
-            if narrow.get(i) == Some(&true) {
-                out.points_beyond_narrow += 1;
-                beyond_narrow += weight * twice;
-            } else if d > out.max_wide {
-                out.max_wide = d;
-                out.max_wide_at = points[i];
-            }
-        }
-        weighted += sum * twice;
-        area += twice;
+        let first = SAMPLES * ti;
+        sums.add(
+            &mut out,
+            tolerance,
+            mesh.corners(t),
+            &points[first..first + SAMPLES],
+            &found[first..first + SAMPLES],
+            |k| narrow.get(first + k) == Some(&true),
+        );
     }
-    out.mean = if area > 0.0 { weighted / area } else { 0.0 };
-    out.area_beyond = if area > 0.0 { beyond / area } else { 0.0 };
-    out.area_beyond_narrow = if area > 0.0 {
-        beyond_narrow / area
-    } else {
-        0.0
-    };
+    sums.finish(&mut out);
     let against: Vec<f64> = mesh
         .triangles
         .par_iter()
@@ -216,12 +178,101 @@ pub fn deviation_where_wide(
         .filter(|&twice| twice >= 0.0)
         .collect();
     out.facing_against = against.len();
-    out.area_facing_against = if area > 0.0 {
-        against.iter().fold(0.0, |s, x| s + x) / area
+    out.area_facing_against = if sums.area > 0.0 {
+        against.iter().fold(0.0, |s, x| s + x) / sums.area
     } else {
         0.0
     };
     out
+}
+
+/// Sample points per triangle.
+const SAMPLES: usize = 7;
+/// The degree-3 rule on a triangle, in the order of [`sample_points`]: corners 3/60, edge
+/// middles 8/60, centroid 27/60.
+const WEIGHTS: [f64; SAMPLES] = [
+    3.0 / 60.0,
+    3.0 / 60.0,
+    3.0 / 60.0,
+    8.0 / 60.0,
+    8.0 / 60.0,
+    8.0 / 60.0,
+    27.0 / 60.0,
+];
+
+/// A triangle's sample points: its corners, the middles of its edges, its centroid.
+fn sample_points([a, b, c]: [DVec3; 3]) -> [[f64; 3]; SAMPLES] {
+    [
+        a,
+        b,
+        c,
+        (a + b) * 0.5,
+        (b + c) * 0.5,
+        (c + a) * 0.5,
+        (a + b + c) / 3.0,
+    ]
+    .map(|p| p.to_array())
+}
+
+/// The area-weighted sums behind a [`Deviation`]'s mean and shares, triangle by triangle.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sums {
+    /// Twice the area, times the weighted mean distance, summed.
+    weighted: f64,
+    /// Twice the area.
+    area: f64,
+    /// Twice the area beyond the tolerance (by the weights of the points beyond).
+    beyond: f64,
+    /// Of that, where the model is narrow.
+    beyond_narrow: f64,
+}
+
+impl Sums {
+    /// Counts one triangle (`corners`) whose sample points and their distances are
+    /// `points` and `found`; `narrow(k)` says whether point k is beyond and narrow.
+    fn add(
+        &mut self,
+        out: &mut Deviation,
+        tolerance: f64,
+        [a, b, c]: [DVec3; 3],
+        points: &[[f64; 3]],
+        found: &[Found],
+        narrow: impl Fn(usize) -> bool,
+    ) {
+        let twice = (b - a).cross(c - a).length();
+        let mut sum = 0.0;
+        for (k, &weight) in WEIGHTS.iter().enumerate() {
+            let Found { d, estimated, .. } = found[k];
+            out.samples += 1;
+            out.estimated += usize::from(estimated);
+            sum += weight * d;
+            if d > tolerance {
+                out.points_beyond += 1;
+                self.beyond += weight * twice;
+            }
+            if d > out.max {
+                out.max = d;
+                out.at = points[k];
+            }
+            if narrow(k) {
+                out.points_beyond_narrow += 1;
+                self.beyond_narrow += weight * twice;
+            } else if d > out.max_wide {
+                out.max_wide = d;
+                out.max_wide_at = points[k];
+            }
+        }
+        self.weighted += sum * twice;
+        self.area += twice;
+    }
+
+    /// Puts the mean and the shares into `out`.
+    fn finish(&self, out: &mut Deviation) {
+        let share = |x: f64| if self.area > 0.0 { x / self.area } else { 0.0 };
+        out.mean = share(self.weighted);
+        out.area_beyond = share(self.beyond);
+        out.area_beyond_narrow = share(self.beyond_narrow);
+    }
 }
 
 /// A sample point's distance to the surface.
@@ -346,7 +397,7 @@ fn refine_largest(
                 brackets.push((u, step * k as f64, step * (k + 1) as f64));
             }
         }
-        for _ in 0..BISECTIONS / 2 {
+        for _ in 0..AROUND_BISECTIONS {
             let mids = brackets
                 .iter()
                 .map(|&(u, lo, hi)| p + u * (0.5 * (lo + hi)));

@@ -2,25 +2,21 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use anyhow::{Context as _, Result, bail};
+use anyhow::Result;
 use clap::Args;
-use isoforge_mesh::io::MeshWriter;
-use isoforge_mesh::{
-    Estimate, MAX_DEPTH, MeshError, MeshFormat, MeshNotes, MeshSettings, StreamCheck,
-};
-use isoforge_output::{Options, OutputFile};
+use isoforge_mesh::{Estimate, MAX_DEPTH, MeshFormat, MeshSettings};
 use serde_json::json;
 
-use crate::common::{Global, ModelArgs, print_json, progress_bar};
+use crate::common::{Global, LoadedModel, ModelArgs, print_json};
 use crate::machine::human_bytes;
 
 /// The default finest level: the region's longest side in 256 cells.
 const DEFAULT_DEPTH: u8 = 8;
 
+mod attempt;
 mod steps;
 
 /// Arguments of `isoforge mesh`.
@@ -48,6 +44,11 @@ pub struct MeshArgs {
     /// Worker threads (default: all cores; at most 256).
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
+    /// Depth to go down to for the tolerance: each mesh is measured against the model by the
+    /// field and, while it misses the tolerance (in mm, the first depth's), the model is
+    /// meshed again one level finer, up to depth N.
+    #[arg(long, value_name = "N")]
+    max_depth: Option<u8>,
     /// Mesh even when the estimated memory is more than the machine has available.
     #[arg(long)]
     no_memory_check: bool,
@@ -87,6 +88,31 @@ fn check_fits(estimate: &Estimate, available: Option<u64>) -> Result<()> {
         human_bytes(estimate.bytes),
         human_bytes(available as f64),
     )))
+}
+
+/// The memory estimate for `settings`, refused when it is more than the machine has
+/// available (unless `unchecked`). The lattice's own bound first: when even a mesh of every
+/// block fits (depth 9 and below, on any machine), the octree is not built twice just to
+/// count.
+fn fitting_estimate(
+    loaded: &LoadedModel,
+    settings: &MeshSettings,
+    available: Option<u64>,
+    unchecked: bool,
+) -> Result<Estimate> {
+    let mut estimate = isoforge_mesh::estimate_bound(settings);
+    if available.is_some_and(|a| estimate.bytes > a as f64) {
+        estimate = isoforge_mesh::estimate(&loaded.model.shape, settings);
+    }
+    if !unchecked {
+        check_fits(&estimate, available)?;
+    }
+    Ok(estimate)
+}
+
+/// A point for a note: `(x, y, z)` to a micrometre.
+fn point(p: [f64; 3]) -> String {
+    format!("({:.3}, {:.3}, {:.3})", p[0], p[1], p[2])
 }
 
 /// The depth for a cell size: the first level whose cells are no larger.
@@ -133,6 +159,11 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
     {
         return usage(format!("--depth {d}: at most {MAX_DEPTH}"));
     }
+    if let Some(d) = args.max_depth
+        && d > MAX_DEPTH
+    {
+        return usage(format!("--max-depth {d}: at most {MAX_DEPTH}"));
+    }
     if let Some(t) = args.tolerance
         && !(t.is_finite() && t >= 0.0)
     {
@@ -149,6 +180,15 @@ pub fn run(args: MeshArgs, global: &Global) -> Result<ExitCode> {
         .output
         .clone()
         .unwrap_or_else(|| default_output(&args.model.model, format));
+    // A mesh that misses the tolerance is dropped for a finer one, which a pipe or a
+    // device cannot take back.
+    if args.max_depth.is_some() && std::fs::metadata(&output).is_ok_and(|m| !m.is_file()) {
+        return usage(format!(
+            "--max-depth: {} is not a regular file, and a mesh written there could not be \
+             dropped for a finer one",
+            output.display()
+        ));
+    }
     if let Some(sweep) = args.model.sweep()? {
         return steps::run(&args, &sweep, format, &output, global);
     }
@@ -164,6 +204,10 @@ pub(super) struct Made {
     pub triangles: u64,
     /// The finest cell's side.
     pub cell: f64,
+    /// The depth of the mesh written (with `--max-depth`, perhaps finer than asked).
+    pub depth: u8,
+    /// With `--max-depth`: whether the mesh holds the tolerance, measured by the field.
+    pub tolerance_held: Option<bool>,
 }
 
 impl Made {
@@ -207,72 +251,91 @@ pub(super) fn mesh_one(
         },
         (None, None) => DEFAULT_DEPTH,
     };
-    // Before the work: a model given as its own output, a missing folder or a read-only
-    // file is refused now, not after minutes of meshing.
-    let out = OutputFile::prepare(&output, Options::with_inputs(&[&args.model.model]))?;
-
     let mut settings = MeshSettings::new(bounds, depth);
     settings.threads = args.threads.unwrap_or(0);
     settings.tolerance = args.tolerance;
-    let notes = Arc::new(MeshNotes::default());
-    settings.notes = Some(notes.clone());
-    // The lattice's own bound first: when even a mesh of every block fits (depth 9 and
-    // below, on any machine), the octree is not built twice just to count.
-    let available = crate::machine::available_memory();
-    let mut estimate = isoforge_mesh::estimate_bound(&settings);
-    if available.is_some_and(|a| estimate.bytes > a as f64) {
-        estimate = isoforge_mesh::estimate(&loaded.model.shape, &settings);
-    }
-    if !args.no_memory_check {
-        check_fits(&estimate, available)?;
-    }
-
-    let bar = progress_bar(global, 1000, "meshing");
-    let bar_cb = bar.clone();
-    settings.progress = Some(Arc::new(move |f: f64| {
-        bar_cb.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64)
-    }));
-    // The mesh goes to the file as it is made, through a checker: never held whole.
-    let spill_folder = out
-        .target()
-        .parent()
-        .map(Path::to_path_buf)
-        .unwrap_or_else(std::env::temp_dir);
-    let writer = MeshWriter::streaming(
-        format,
-        std::io::BufWriter::with_capacity(1 << 20, out),
-        &spill_folder,
-    )
-    .with_context(|| format!("{}: cannot write the mesh", output.display()))?;
-    let centre = [0, 1, 2].map(|a| (bounds.min[a] + bounds.max[a]) * 0.5);
-    let mut sink = StreamCheck::new(writer, centre);
-    match isoforge_mesh::mesh_shape_into(&loaded.model.shape, &settings, &mut sink) {
-        Ok(()) => {}
-        Err(MeshError::Write(e)) => {
-            return Err(e).with_context(|| format!("{}: cannot write the mesh", output.display()));
+    // With --max-depth the tolerance stays the first depth's in millimetres at every
+    // depth, and every mesh is measured against it.
+    let tolerance = settings.effective_tolerance();
+    let last = match args.max_depth {
+        None => depth,
+        Some(m) if m < depth => {
+            return Err(crate::common::usage(format!(
+                "--max-depth {m}: below the depth meshed first ({depth})"
+            )));
         }
-        Err(e) => return Err(e.into()),
-    }
-    bar.finish_and_clear();
-    let (report, writer) = sink.finish();
-    if report.tally.triangles == 0 {
-        bail!(
-            "{}: nothing is inside the region {:?} to {:?} at depth {depth} (the field is not \
-             negative at any lattice corner; parts thinner than a cell need a finer --depth)",
-            args.model.model.display(),
-            bounds.min,
-            bounds.max
-        );
-    }
-    let file = writer
-        .finish()
-        .and_then(|buf| buf.into_inner().map_err(|e| e.into_error()))
-        .with_context(|| format!("{}: cannot write the mesh", output.display()))?;
+        Some(_) if tolerance.is_nan() || tolerance <= 0.0 => {
+            return Err(crate::common::usage(
+                "--max-depth needs a tolerance above 0 (--tolerance 0 asks for uniform cells, \
+                 with no distance to hold)"
+                    .to_string(),
+            ));
+        }
+        Some(m) => {
+            settings.tolerance = Some(tolerance);
+            m
+        }
+    };
+    let job = attempt::Job {
+        model_path: &args.model.model,
+        loaded: &loaded,
+        format,
+        output: &output,
+        measure: args.max_depth.is_some(),
+    };
+    let available = crate::machine::available_memory();
+    let mut tried = Vec::new();
+    let made = loop {
+        let began = Instant::now();
+        let estimate = fitting_estimate(&loaded, &settings, available, args.no_memory_check)?;
+        let made = attempt::attempt(&job, settings.clone(), estimate, global)?;
+        let missed = made.deviation.filter(|d| !d.holds(tolerance));
+        tried.push(json!({
+            "depth": settings.depth,
+            "triangles": made.report.tally.triangles,
+            "max_deviation": made.deviation.map(|d| d.max),
+            "seconds": began.elapsed().as_secs_f64(),
+        }));
+        let Some(missed) = missed else { break made };
+        if settings.depth == last {
+            break made;
+        }
+        // The next depth must fit in memory too, else this mesh is the one kept.
+        let mut deeper = settings.clone();
+        deeper.depth += 1;
+        if let Err(e) = fitting_estimate(&loaded, &deeper, available, args.no_memory_check) {
+            if !global.quiet {
+                eprintln!("note: {e:#}; keeping the mesh at depth {}", settings.depth);
+            }
+            break made;
+        }
+        if !global.quiet && !global.json {
+            eprintln!(
+                "note: depth {}: the mesh is up to {:.3e} mm from the surface (tolerance \
+                 {tolerance:.3e} mm), at {}; meshing again at depth {}",
+                settings.depth,
+                missed.max,
+                point(missed.at),
+                deeper.depth
+            );
+        }
+        settings = deeper;
+    };
+    let attempt::Attempt {
+        settings,
+        estimate,
+        notes,
+        report,
+        deviation,
+        file,
+    } = made;
+    let depth = settings.depth;
     file.commit()?;
     let seconds = start.elapsed().as_secs_f64();
     let thin_triangles = notes.thin_triangles.load(Ordering::Relaxed);
+    let held = deviation.map(|d| d.holds(tolerance));
     if global.json {
-        print_json(&json!({
+        let mut j = json!({
             "triangles": report.tally.triangles,
             "vertices": report.tally.vertices,
             "volume": report.tally.volume(),
@@ -290,10 +353,22 @@ pub(super) fn mesh_one(
             "thin_triangles": thin_triangles,
             "parts_turned": notes.parts_turned.load(Ordering::Relaxed),
             "seconds": seconds,
-        }));
+        });
+        if let Some(d) = deviation {
+            j["max_depth"] = json!(last);
+            j["max_deviation"] = json!(d.max);
+            j["max_deviation_at"] = json!(d.at);
+            j["mean_deviation"] = json!(d.mean);
+            j["tolerance_held"] = json!(held);
+            j["depths"] = json!(tried);
+        }
+        print_json(&j);
     } else if !global.quiet {
+        let measured = deviation
+            .map(|d| format!(", up to {:.3e} mm off", d.max))
+            .unwrap_or_default();
         println!(
-            "{}: {} triangles, {} vertices, volume {:.6}, depth {depth}, tolerance {:.3e} mm, {:.2} s",
+            "{}: {} triangles, {} vertices, volume {:.6}, depth {depth}, tolerance {:.3e} mm{measured}, {:.2} s",
             output.display(),
             report.tally.triangles,
             report.tally.vertices,
@@ -302,10 +377,22 @@ pub(super) fn mesh_one(
             seconds
         );
     }
+    if let (Some(false), Some(d)) = (held, deviation)
+        && !global.quiet
+    {
+        eprintln!(
+            "note: the mesh misses the tolerance ({tolerance:.3e} mm) by up to {:.3e} mm, at \
+             {}, even at depth {depth}; a larger --max-depth may hold it",
+            d.max - tolerance,
+            point(d.at)
+        );
+    }
     let made = Made {
         thin_triangles,
         triangles: report.tally.triangles,
         cell: settings.cell(),
+        depth,
+        tolerance_held: held,
     };
     if let Some(note) = made.thin_note()
         && !global.quiet

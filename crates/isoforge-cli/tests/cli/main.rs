@@ -11,6 +11,7 @@ mod dialects;
 mod help;
 mod info;
 mod interop;
+mod max_depth;
 mod mesh;
 mod openscad;
 mod outputs;

@@ -166,6 +166,9 @@ fn usage_errors_exit_2_and_write_nothing() {
         vec!["--threads", "0"],
         vec!["--threads", "100000"],
         vec!["--depth", "many"],
+        vec!["--depth", "6", "--max-depth", "5"],
+        vec!["--max-depth", "17"],
+        vec!["--max-depth", "9", "--tolerance", "0"],
     ] {
         let mut args = vec!["mesh", s(&sphere), "-o", s(&out)];
         args.extend_from_slice(&extra);

@@ -1,7 +1,8 @@
 //! `isoforge mesh --param t=0..1:N`: one mesh per step of a parameter range, `NAME-000.stl`
 //! upward. Each step is an ordinary `isoforge mesh` run with the parameter fixed; its file is
 //! then read back and checked, so the report is of what is on disk. A step whose mesh has
-//! parts thinner than the lattice gets the same note a single run does.
+//! parts thinner than the lattice gets the same note a single run does; with `--max-depth`
+//! each step finds its own depth, which the report gives.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -86,6 +87,10 @@ pub fn run(
         let mut j = crate::cmd::check::report_json(&path.display().to_string(), &report);
         j["value"] = json!(value);
         j["thin_triangles"] = json!(made.thin_triangles);
+        j["depth"] = json!(made.depth);
+        if let Some(held) = made.tolerance_held {
+            j["tolerance_held"] = json!(held);
+        }
         steps.push(j);
     }
     if global.json {

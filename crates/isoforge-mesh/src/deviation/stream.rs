@@ -1,0 +1,155 @@
+//! [`DeviationSink`]: the distance from the surface of a mesh that passes by on its way to
+//! another sink, measured as in [`super::deviation_beyond`] but a chunk of triangles at a
+//! time, so the mesh is never held whole (`isoforge mesh --max-depth` measures every mesh
+//! it writes this way).
+
+use std::io;
+
+use glam::{DVec3, Vec3};
+use isoforge_field::ClippedField;
+use rayon::prelude::*;
+
+use super::{CHUNK, Deviation, Found, SAMPLES, Sums, distances, refine_largest, sample_points};
+use crate::sink::MeshSink;
+
+/// Triangles measured together: enough points for the batches to be full and the work
+/// shared among threads, few enough to keep memory small (about 3 MB of points).
+const TRIANGLES: usize = 8192;
+
+/// A sink that measures what passes through it on the way to `inner`.
+pub struct DeviationSink<'f, S> {
+    inner: S,
+    field: &'f ClippedField,
+    tolerance: f64,
+    waiting: Vec<[DVec3; 3]>,
+    out: Deviation,
+    sums: Sums,
+}
+
+impl<'f, S: MeshSink> DeviationSink<'f, S> {
+    /// Measures against `field` on the way to `inner`; the points farther than
+    /// `tolerance` are searched around, as [`super::deviation_beyond`] does.
+    pub fn new(inner: S, field: &'f ClippedField, tolerance: f64) -> Self {
+        DeviationSink {
+            inner,
+            field,
+            tolerance,
+            waiting: Vec::with_capacity(TRIANGLES),
+            out: Deviation {
+                beyond_exact: true,
+                ..Deviation::default()
+            },
+            sums: Sums::default(),
+        }
+    }
+
+    /// The triangles waiting, measured.
+    fn measure(&mut self) {
+        let points: Vec<[f64; 3]> = self
+            .waiting
+            .iter()
+            .flat_map(|&t| sample_points(t))
+            .collect();
+        let mut found: Vec<Found> = points
+            .par_chunks(CHUNK)
+            .flat_map_iter(|chunk| distances(self.field, chunk))
+            .collect();
+        self.out.beyond_exact &= refine_largest(self.field, &points, &mut found, self.tolerance);
+        for (ti, &corners) in self.waiting.iter().enumerate() {
+            let first = SAMPLES * ti;
+            self.sums.add(
+                &mut self.out,
+                self.tolerance,
+                corners,
+                &points[first..first + SAMPLES],
+                &found[first..first + SAMPLES],
+                |_| false,
+            );
+        }
+        self.waiting.clear();
+    }
+
+    /// The distance of everything that passed, and the inner sink.
+    pub fn finish(mut self) -> (Deviation, S) {
+        self.measure();
+        self.sums.finish(&mut self.out);
+        (self.out, self.inner)
+    }
+}
+
+impl<S: MeshSink> MeshSink for DeviationSink<'_, S> {
+    fn vertex(&mut self, p: [f32; 3]) -> io::Result<()> {
+        self.inner.vertex(p)
+    }
+
+    fn triangle(&mut self, t: [u32; 3], corners: [[f32; 3]; 3]) -> io::Result<()> {
+        self.inner.triangle(t, corners)?;
+        self.waiting.push(corners.map(|p| Vec3::from(p).as_dvec3()));
+        if self.waiting.len() == TRIANGLES {
+            self.measure();
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Mesh, deviation_beyond, samples};
+    use isoforge_field::{Bounds, Shape};
+
+    /// Replays `mesh` into `sink` as the mesher would: vertices, then triangles.
+    fn replay(mesh: &Mesh, sink: &mut impl MeshSink) {
+        for &v in &mesh.vertices {
+            sink.vertex(v).expect("vertex");
+        }
+        for &t in &mesh.triangles {
+            let corners = t.map(|i| mesh.vertices[i as usize]);
+            sink.triangle(t, corners).expect("triangle");
+        }
+    }
+
+    #[test]
+    fn measures_what_the_whole_mesh_measure_does_and_passes_it_on() {
+        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+        let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
+        let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
+        let field = ClippedField::new(&ball, region);
+        // Uniform cells, for more triangles than one chunk: the sums run over chunks.
+        let mut settings = crate::MeshSettings::new(region, 7);
+        settings.tolerance = Some(0.0);
+        let mesh = crate::mesh_shape(&ball, &settings);
+        assert!(mesh.triangles.len() > TRIANGLES, "{}", mesh.triangles.len());
+        for tolerance in [0.0, 1e-3, f64::INFINITY] {
+            let mut sink = DeviationSink::new(Mesh::default(), &field, tolerance);
+            replay(&mesh, &mut sink);
+            let (d, passed) = sink.finish();
+            assert_eq!(passed, mesh);
+            let whole = deviation_beyond(&mesh, &field, tolerance);
+            assert_eq!(
+                (d.max, d.at, d.samples),
+                (whole.max, whole.at, whole.samples)
+            );
+            assert_eq!(d.points_beyond, whole.points_beyond);
+            assert!(
+                (d.mean - whole.mean).abs() <= 1e-12 * whole.mean.max(1e-30),
+                "{d:?}"
+            );
+            assert!((d.area_beyond - whole.area_beyond).abs() < 1e-9, "{d:?}");
+        }
+    }
+
+    #[test]
+    fn a_polyhedron_inside_the_ball_is_off_by_its_sagitta() {
+        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+        let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
+        let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
+        let field = ClippedField::new(&ball, region);
+        let mut sink = DeviationSink::new(Mesh::default(), &field, 0.35);
+        replay(&samples::octahedron(), &mut sink);
+        let (d, _) = sink.finish();
+        assert!((d.max - (1.0 - 1.0 / 3f64.sqrt())).abs() < 1e-6, "{d:?}");
+        assert!(!d.holds(0.35) && d.holds(0.5));
+        assert_eq!(d.points_beyond, 8);
+    }
+}
