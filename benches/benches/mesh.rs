@@ -8,13 +8,18 @@
 //! bytes held at once (per thread: the calling thread's share; whole-process peaks, with
 //! fidget's beside them, come from `tools/mesh-vs-fidget.sh`). Triangles are the items
 //! counter, shown next to the time as a rate.
+//!
+//! `measured_d8` is the same mesh measured against the model on its way (the
+//! `DeviationSink` that `isoforge mesh --max-depth` puts in front of the file): its time
+//! less `d8`'s is what the measure costs.
 
 use std::path::PathBuf;
 
 use divan::counter::ItemsCount;
 use divan::{AllocProfiler, Bencher};
 use isoforge_field::Bounds;
-use isoforge_mesh::{MeshSettings, Tally, mesh_shape_into};
+use isoforge_field::ClippedField;
+use isoforge_mesh::{DeviationSink, MeshSettings, Tally, mesh_shape_into};
 
 #[global_allocator]
 static ALLOC: AllocProfiler = AllocProfiler::system();
@@ -84,4 +89,27 @@ fn colonnade_d8(bencher: Bencher) {
     let model = load("vm/colonnade.vm");
     let bounds = Bounds::new([-1.0; 3], [1.0; 3]).expect("box");
     run(bencher, &model, bounds, 8);
+}
+
+#[divan::bench(args = MODELS, sample_count = 2, sample_size = 1)]
+fn measured_d8(bencher: Bencher, name: &str) {
+    let model = load(&format!("bench/{name}.rhai"));
+    let Some(bounds) = model.bounds else {
+        panic!("{name}: the bench script declares its bounds")
+    };
+    let settings = MeshSettings::new(bounds, 8);
+    let field = ClippedField::new(&model.shape, bounds);
+    let measured = || {
+        let tally = Tally::around([0.0; 3]);
+        let mut sink = DeviationSink::new(tally, &field, settings.effective_tolerance());
+        if let Err(e) = mesh_shape_into(&model.shape, &settings, &mut sink) {
+            panic!("meshing failed: {e}");
+        }
+        let (deviation, tally) = sink.finish();
+        (deviation.max, tally.triangles)
+    };
+    let (_, triangles) = measured();
+    bencher
+        .counter(ItemsCount::new(triangles as usize))
+        .bench(|| divan::black_box(measured()));
 }
