@@ -7,9 +7,8 @@ use std::io;
 
 use glam::{DVec3, Vec3};
 use isoforge_field::ClippedField;
-use rayon::prelude::*;
 
-use super::{CHUNK, Deviation, Found, SAMPLES, Sums, distances, refine_largest, sample_points};
+use super::{Deviation, SAMPLES, Sums, distances_nearby, refine_largest, sample_points};
 use crate::sink::MeshSink;
 
 /// Triangles measured together: enough points for the batches to be full and the work
@@ -50,10 +49,7 @@ impl<'f, S: MeshSink> DeviationSink<'f, S> {
             .iter()
             .flat_map(|&t| sample_points(t))
             .collect();
-        let mut found: Vec<Found> = points
-            .par_chunks(CHUNK)
-            .flat_map_iter(|chunk| distances(self.field, chunk))
-            .collect();
+        let mut found = distances_nearby(self.field, &points);
         self.out.beyond_exact &= refine_largest(self.field, &points, &mut found, self.tolerance);
         for (ti, &corners) in self.waiting.iter().enumerate() {
             let first = SAMPLES * ti;
