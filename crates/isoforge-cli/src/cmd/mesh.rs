@@ -309,7 +309,7 @@ pub(super) fn mesh_one(
             }
             break made;
         }
-        if !global.quiet && !global.json {
+        if !global.quiet {
             eprintln!(
                 "note: depth {}: the mesh is up to {:.3e} mm from the surface (tolerance \
                  {tolerance:.3e} mm), at {}; meshing again at depth {}",

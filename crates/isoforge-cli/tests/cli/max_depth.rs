@@ -166,3 +166,43 @@ fn a_pipe_is_refused_before_any_work() {
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(stderr.contains("not a regular file"), "{stderr}");
 }
+
+#[test]
+fn each_step_of_a_parameter_range_finds_its_own_depth() {
+    // spiky_ball's spikes sharpen with their number: at depth 6 two spikes need depth 7,
+    // five need depth 8, for the same tolerance.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = fixtures().join("modern/spiky_ball.rhai");
+    let out = dir.path().join("ball.stl");
+    let (j, _) = mesh_json(
+        &model,
+        &out,
+        &[
+            "--param",
+            "spikes=2..5:2",
+            "--depth",
+            "6",
+            "--max-depth",
+            "8",
+        ],
+    );
+    let steps = j["steps"].as_array().expect("steps");
+    let found: Vec<(u64, bool)> = steps
+        .iter()
+        .map(|s| {
+            (
+                s["depth"].as_u64().unwrap(),
+                s["tolerance_held"].as_bool().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(found, [(7, true), (8, true)], "{j}");
+    // The step that went deepest holds by `check` too, at depth 6's tolerance.
+    let tolerance = 28.0 / 64.0 * 0.1;
+    let (c, status) = checked(&dir.path().join("ball-001.stl"), &model, tolerance);
+    assert_eq!(
+        (c["tolerance_held"].as_bool(), status),
+        (Some(true), Some(0)),
+        "{c}"
+    );
+}
