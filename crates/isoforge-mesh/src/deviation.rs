@@ -16,6 +16,10 @@
 //! a solid or a gap narrower than two of its cells, so a mesh's promise holds where the
 //! model is wider than that.
 //!
+//! [`DeviationSink`] (`stream.rs`) measures a mesh the same way as it passes on its way to
+//! a file, a chunk of triangles at a time. A long tape is run narrowed to the small cube
+//! around each group of points (`distances_grouped`), as the mesher runs it per block.
+//!
 //! ```
 //! use isoforge_field::{Bounds, ClippedField, Shape};
 //! use isoforge_mesh::{deviation, mesh_shape, MeshSettings};
