@@ -112,20 +112,22 @@ impl MeshSink for Tally {
     }
 }
 
+/// Gives `mesh` to `sink` as the mesher would: its vertices, then its triangles.
+#[cfg(test)]
+pub(crate) fn replay(mesh: &Mesh, sink: &mut dyn MeshSink) {
+    for &v in &mesh.vertices {
+        sink.vertex(v).expect("vertex");
+    }
+    for &t in &mesh.triangles {
+        sink.triangle(t, mesh.corners(t).map(|p| p.as_vec3().to_array()))
+            .expect("triangle");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::samples;
-
-    fn replay(mesh: &Mesh, sink: &mut dyn MeshSink) {
-        for &v in &mesh.vertices {
-            sink.vertex(v).expect("vertex");
-        }
-        for &t in &mesh.triangles {
-            sink.triangle(t, mesh.corners(t).map(|p| p.as_vec3().to_array()))
-                .expect("triangle");
-        }
-    }
 
     #[test]
     fn a_mesh_sink_collects_what_it_is_given() {

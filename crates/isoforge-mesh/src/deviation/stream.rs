@@ -91,19 +91,9 @@ impl<S: MeshSink> MeshSink for DeviationSink<'_, S> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sink::replay;
     use crate::{Mesh, deviation_beyond, samples};
     use isoforge_field::{Bounds, Shape};
-
-    /// Replays `mesh` into `sink` as the mesher would: vertices, then triangles.
-    fn replay(mesh: &Mesh, sink: &mut impl MeshSink) {
-        for &v in &mesh.vertices {
-            sink.vertex(v).expect("vertex");
-        }
-        for &t in &mesh.triangles {
-            let corners = t.map(|i| mesh.vertices[i as usize]);
-            sink.triangle(t, corners).expect("triangle");
-        }
-    }
 
     #[test]
     fn measures_what_the_whole_mesh_measure_does_and_passes_it_on() {
