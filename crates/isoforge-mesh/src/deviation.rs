@@ -468,7 +468,8 @@ fn distances_grouped(field: &ClippedField, points: &[[f64; 3]]) -> Vec<Found> {
     for run in order.chunk_by(|&a, &b| cube(&points[a as usize]) == cube(&points[b as usize])) {
         tasks.extend(run.chunks(CHUNK));
     }
-    let measured: Vec<(u32, Option<Found>)> = tasks
+    // In the order of `order`: the tasks are its slices, one after another.
+    let measured: Vec<Option<Found>> = tasks
         .par_iter()
         .map_init(IntervalEval::new, |ev, &task| {
             let c = cube(&points[task[0] as usize]);
@@ -479,14 +480,13 @@ fn distances_grouped(field: &ClippedField, points: &[[f64; 3]]) -> Vec<Found> {
             field.interval(ev, b);
             let narrowed = field.narrow(ev);
             let mine: Vec<[f64; 3]> = task.iter().map(|&i| points[i as usize]).collect();
-            let found = distances_within(&narrowed, &mine, reach);
-            task.iter().copied().zip(found).collect::<Vec<_>>()
+            distances_within(&narrowed, &mine, reach)
         })
         .flatten_iter()
         .collect();
     let mut out = vec![Found::default(); points.len()];
     let mut far: Vec<u32> = Vec::new();
-    for (i, f) in measured {
+    for (&i, f) in order.iter().zip(measured) {
         match f {
             Some(f) => out[i as usize] = f,
             None => far.push(i),
