@@ -13,8 +13,10 @@ listed apart. Each is meshed with `isoforge mesh --depth N --json`; the mesh is 
 with `check --against MODEL --tolerance T --depth N`, T the tolerance `mesh` reports. One
 line per model: triangles, the largest distance in tolerances, the largest where the
 model is at least two cells wide, and the points beyond the tolerance where it is
-narrower. The last lines count the fixtures where the tolerance held, everywhere and
-where wide. `--only` keeps the models whose name contains one of the words given.
+narrower, and the largest distance of the places the mesher's splits left off the surface
+(`mesh --json`'s `left_off`, a plain run's own word on a miss). The last lines count the
+fixtures where the tolerance held, everywhere and where wide, and those where the places
+left off told it right (one beyond the tolerance exactly when `check` finds it missed). `--only` keeps the models whose name contains one of the words given.
 
 The issue's criterion is "held everywhere" on every fixture (docs/meshing.md, "What the
 tolerance promises" and "Not done").
@@ -73,7 +75,10 @@ def sweep_one(binary, path, extra, depth, finer, max_depth, workdir):
     check = run_json([binary, "check", stl, "--against", path, *extra,
                       "--tolerance", repr(tol), "--depth", str(depth), "--json"])
     os.remove(stl)
+    left = mesh.get("left_off") or {}
     return {
+        "left": left.get("max_distance", 0.0) / tol,
+        "left_beyond": left.get("beyond_tolerance", 0),
         "triangles": mesh["triangles"],
         "seconds": mesh["seconds"],
         "depth": mesh["depth"],
@@ -98,8 +103,8 @@ def main():
         sys.exit("%s is not there: cargo build --release -p isoforge-cli" % a.bin)
     tally = {}
     print("| model | depth | triangles | seconds | largest, tolerances | where wide "
-          "| points beyond where narrow |")
-    print("| --- | --- | --- | --- | --- | --- | --- |")
+          "| points beyond where narrow | left off, tolerances |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     with tempfile.TemporaryDirectory() as workdir:
         for group, path, extra in models():
             name = os.path.relpath(path, ROOT)
@@ -109,16 +114,22 @@ def main():
             mark = "" if r["held"] else (" (held where wide)" if r["held_wide"] else " (missed)")
             if not r["closed"]:
                 mark += " NOT CLOSED AND MANIFOLD"
-            print("| %s | %d | %d | %.2f | %.3f%s | %.3f | %d |" % (
+            # A place left off is a point of the mesh: farther than check's largest would
+            # mean check missed it, or the place was not on the mesh written.
+            left_mark = " (beyond check's largest)" if r["left"] > r["max"] + 1e-9 else ""
+            print("| %s | %d | %d | %.2f | %.3f%s | %.3f | %d | %.3f (%d beyond)%s |" % (
                 name, r["depth"], r["triangles"], r["seconds"], r["max"], mark, r["wide"],
-                r["narrow_points"]))
+                r["narrow_points"], r["left"], r["left_beyond"], left_mark))
             sys.stdout.flush()
-            t = tally.setdefault(group, [0, 0, 0])
+            t = tally.setdefault(group, [0, 0, 0, 0])
             t[0] += 1
             t[1] += r["held"]
             t[2] += r["held_wide"]
-    for group, (n, held, wide) in tally.items():
-        print("%s: the tolerance held on %d of %d, where wide on %d" % (group, held, n, wide))
+            # Whether the places left off told the miss (or the hold) right.
+            t[3] += r["held"] == (r["left_beyond"] == 0)
+    for group, (n, held, wide, told) in tally.items():
+        print("%s: the tolerance held on %d of %d, where wide on %d; the places left off "
+              "told it right on %d" % (group, held, n, wide, told))
 
 
 if __name__ == "__main__":

@@ -187,6 +187,16 @@ pub fn deviation_where_wide(
     out
 }
 
+/// The distance to the surface of each of `points`, measured as [`deviation_beyond`]
+/// measures a mesh's sample points: along the gradient line, and searched around for a
+/// nearer surface where that reads over `tolerance` (so a distance over it is truly over,
+/// up to the limit on points searched).
+pub fn distances_beyond(field: &ClippedField, points: &[[f64; 3]], tolerance: f64) -> Vec<f64> {
+    let mut found = distances_nearby(field, points);
+    refine_largest(field, points, &mut found, tolerance);
+    found.iter().map(|f| f.d).collect()
+}
+
 /// Sample points per triangle.
 const SAMPLES: usize = 7;
 /// The degree-3 rule on a triangle, in the order of [`sample_points`]: corners 3/60, edge

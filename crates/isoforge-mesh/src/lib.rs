@@ -35,7 +35,9 @@ pub use dc::{
     DEFAULT_TOLERANCE_CELLS, Estimate, MAX_DEPTH, MeshError, MeshNotes, MeshSettings, Progress,
     estimate, estimate_bound, mesh_shape, mesh_shape_into, try_mesh_shape,
 };
-pub use deviation::{Deviation, DeviationSink, deviation, deviation_beyond, deviation_where_wide};
+pub use deviation::{
+    Deviation, DeviationSink, deviation, deviation_beyond, deviation_where_wide, distances_beyond,
+};
 pub use io::{MeshFormat, MeshIoError, read_mesh, write_mesh};
 pub use mesh::Mesh;
 pub use sink::{MeshSink, Tally};

@@ -17,6 +17,7 @@ use crate::machine::human_bytes;
 const DEFAULT_DEPTH: u8 = 8;
 
 mod attempt;
+mod left_off;
 mod steps;
 
 /// Arguments of `isoforge mesh`.
@@ -208,12 +209,25 @@ pub(super) struct Made {
     pub depth: u8,
     /// With `--max-depth`: whether the mesh holds the tolerance, measured by the field.
     pub tolerance_held: Option<bool>,
+    /// Without it: the places the splits left off the surface, measured.
+    pub left_off: Option<left_off::LeftOff>,
+    /// The tolerance in millimetres.
+    pub tolerance: f64,
 }
 
 impl Made {
+    /// The notes for the user: parts thinner than the lattice, places left off the
+    /// surface.
+    pub fn notes(&self) -> impl Iterator<Item = String> {
+        let left_off = self
+            .left_off
+            .and_then(|l| l.note(self.tolerance, self.depth));
+        self.thin_note().into_iter().chain(left_off)
+    }
+
     /// The note on parts thinner than the lattice, when they are enough of the mesh to
     /// tell ([`THIN_NOTE_SHARE`]).
-    pub fn thin_note(&self) -> Option<String> {
+    fn thin_note(&self) -> Option<String> {
         (self.triangles > 0 && self.thin_triangles * THIN_NOTE_SHARE >= self.triangles).then(|| {
             format!(
                 "{} triangles ({:.1} % of the mesh) join the two sides of parts thinner than \
@@ -331,9 +345,13 @@ pub(super) fn mesh_one(
     } = made;
     let depth = settings.depth;
     file.commit()?;
-    let seconds = start.elapsed().as_secs_f64();
     let thin_triangles = notes.thin_triangles.load(Ordering::Relaxed);
     let held = deviation.map(|d| d.holds(tolerance));
+    // Measured whole, the mesh needs no hint.
+    let left_off = deviation
+        .is_none()
+        .then(|| left_off::LeftOff::measure(&loaded, &settings, &notes));
+    let seconds = start.elapsed().as_secs_f64();
     if global.json {
         let mut j = json!({
             "triangles": report.tally.triangles,
@@ -354,6 +372,9 @@ pub(super) fn mesh_one(
             "parts_turned": notes.parts_turned.load(Ordering::Relaxed),
             "seconds": seconds,
         });
+        if let Some(places) = left_off {
+            j["left_off"] = places.to_json();
+        }
         if let Some(d) = deviation {
             j["max_depth"] = json!(last);
             j["max_deviation"] = json!(d.max);
@@ -393,11 +414,13 @@ pub(super) fn mesh_one(
         cell: settings.cell(),
         depth,
         tolerance_held: held,
+        left_off,
+        tolerance,
     };
-    if let Some(note) = made.thin_note()
-        && !global.quiet
-    {
-        eprintln!("note: {note}");
+    for note in made.notes() {
+        if !global.quiet {
+            eprintln!("note: {note}");
+        }
     }
     if !report.is_closed_manifold() {
         eprintln!(

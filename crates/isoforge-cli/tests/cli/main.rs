@@ -11,6 +11,7 @@ mod dialects;
 mod help;
 mod info;
 mod interop;
+mod left_off;
 mod max_depth;
 mod mesh;
 mod openscad;

@@ -588,9 +588,12 @@ fn each_step_of_a_sweep_gets_its_own_thin_note() {
     assert!(thin[0] > 0 && thin[1] == 0, "{thin:?}");
     let stderr = String::from_utf8_lossy(&run.stderr);
     let notes: Vec<&str> = stderr.lines().filter(|l| l.starts_with("note:")).collect();
-    assert_eq!(notes.len(), 1, "{stderr}");
-    assert!(
-        notes[0].contains("g-000.stl") && notes[0].contains("finer --depth"),
-        "{stderr}"
-    );
+    let thin_notes: Vec<&&str> = notes
+        .iter()
+        .filter(|l| l.contains("finer --depth"))
+        .collect();
+    assert_eq!(thin_notes.len(), 1, "{stderr}");
+    assert!(thin_notes[0].contains("g-000.stl"), "{stderr}");
+    // (Either step may also miss its tolerance where the splits onto the surface had to
+    // stop: notes of their own, `left_off.rs`.)
 }

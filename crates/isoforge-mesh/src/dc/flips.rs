@@ -26,6 +26,7 @@
 //! the turns per chunk are bounded, so it ends. Edges across a chunk's seam stay as they
 //! are. The vertices do not move and none is added: only which of them the triangles join.
 
+use std::collections::HashSet;
 use std::io;
 
 use glam::DVec3;
@@ -81,6 +82,16 @@ pub struct Flipper<'a, S: Sampler> {
     at: IntMap<u32, u32>,
     /// Edges turned so far.
     pub turned: u64,
+    /// Points that are no longer on the mesh: each turned edge's middle and its two
+    /// triangles' centres, as single-precision bits ([`place_key`]), so that a place the
+    /// refiner left off the surface there is not reported as the mesh's.
+    pub gone: HashSet<[u32; 3]>,
+}
+
+/// A point as a key that a sum taken in another order still matches (the single-precision
+/// bits of its coordinates).
+pub fn place_key(p: [f64; 3]) -> [u32; 3] {
+    p.map(|c| (c as f32).to_bits())
 }
 
 impl<'a, S: Sampler> Flipper<'a, S> {
@@ -97,6 +108,7 @@ impl<'a, S: Sampler> Flipper<'a, S> {
             tris: Vec::new(),
             at: IntMap::default(),
             turned: 0,
+            gone: HashSet::new(),
         }
     }
 
@@ -189,6 +201,11 @@ impl<'a, S: Sampler> Flipper<'a, S> {
             };
             // (a, b, c) and (b, a, d) become (a, d, c) and (d, b, c).
             let (c, d) = turn;
+            let p = |v: u32| DVec3::from(self.verts[v as usize].map(f64::from));
+            let (pa, pb, pc, pd) = (p(a), p(b), p(c), p(d));
+            for gone in [(pa + pb) * 0.5, (pa + pb + pc) / 3.0, (pb + pa + pd) / 3.0] {
+                self.gone.insert(place_key(gone.to_array()));
+            }
             for (u, v) in [(a, b), (b, a), (b, c), (c, a), (a, d), (d, b)] {
                 along.remove(&(u, v));
             }

@@ -53,8 +53,8 @@ pub mod topology;
 mod tests;
 
 use std::fmt;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 
 use isoforge_field::{Bounds, ClippedField, Shape};
 
@@ -112,6 +112,14 @@ pub struct MeshNotes {
     /// Small closed parts (a blob a cell or two wide, at a large tolerance) that came out
     /// inside out and were turned the right way out (`shells.rs`).
     pub parts_turned: AtomicU64,
+    /// Places on the mesh (a chord's middle, a triangle's centre) that the splits onto the
+    /// surface left off it, because every split there would fold the mesh or none could
+    /// be placed: where the mesh may miss the tolerance. Each once, at most 65,536 of
+    /// them; measure them with [`distances_beyond`](crate::distances_beyond).
+    pub left_off: Mutex<Vec<[f64; 3]>>,
+    /// How many such places were found in all (more than [`MeshNotes::left_off`] holds
+    /// when that is full).
+    pub left_off_found: AtomicU64,
 }
 
 impl fmt::Debug for MeshSettings {

@@ -9,6 +9,7 @@
 //! merges above the block level (`merge.rs`) decide the nodes whose last slab this was, and
 //! finish the polygons that waited for them. Slab z − 1 is then dropped.
 
+use std::collections::HashSet;
 use std::io;
 use std::sync::atomic::Ordering;
 
@@ -16,7 +17,7 @@ use rayon::prelude::*;
 
 use super::contour::{self, Polygon, Ref};
 use super::decimate::{self, Decimator};
-use super::flips::Flipper;
+use super::flips::{Flipper, place_key};
 use super::hermite::{self, Crossing, EdgeRef, Scratch};
 use super::leaf::{self, BlockInput, BlockOut, LeafScratch, Merging, NO_VERT};
 use super::merge::{AboveBlocks, Resolved};
@@ -25,7 +26,7 @@ use super::pipe;
 use super::refine::Refiner;
 use super::sampler::{EvalPool, Sampler};
 use super::shells::SmallShells;
-use super::{MeshError, MeshSettings, Reporter};
+use super::{MeshError, MeshNotes, MeshSettings, Reporter};
 use crate::sink::MeshSink;
 
 /// A finished block: its leaves and cells, and the global indices its vertices got.
@@ -145,13 +146,17 @@ fn behind<S: Sampler>(
     feed(&mut decimator)?;
     decimator.finish().map_err(MeshError::Write)?;
     refiner.finish().map_err(MeshError::Write)?;
+    let left_off = std::mem::take(&mut refiner.left_off);
+    let left_off_found = refiner.left_off_found;
+    let thin_triangles = refiner.thin_triangles;
+    drop(refiner);
+    flipper.finish().map_err(MeshError::Write)?;
     if let Some(notes) = &settings.notes {
         notes
             .thin_triangles
-            .fetch_add(refiner.thin_triangles, Ordering::Relaxed);
+            .fetch_add(thin_triangles, Ordering::Relaxed);
+        note_left_off(notes, left_off, left_off_found, &flipper.gone);
     }
-    drop(refiner);
-    flipper.finish().map_err(MeshError::Write)?;
     shells.finish().map_err(MeshError::Write)?;
     if let Some(notes) = &settings.notes {
         notes
@@ -159,6 +164,30 @@ fn behind<S: Sampler>(
             .fetch_add(shells.turned, Ordering::Relaxed);
     }
     Ok(())
+}
+
+/// Gives the notes the places the refiner left off the surface (`found` of them, `places`
+/// kept), each once, leaving out those the flips took off the mesh (`gone`).
+fn note_left_off(
+    notes: &MeshNotes,
+    mut places: Vec<[f64; 3]>,
+    found: u64,
+    gone: &HashSet<[u32; 3]>,
+) {
+    // An edge left whole is asked about from both sides.
+    let asked = places.len();
+    places.sort_unstable_by_key(|p| p.map(f64::to_bits));
+    places.dedup();
+    let twice = (asked - places.len()) as u64;
+    let kept = places.len();
+    places.retain(|&p| !gone.contains(&place_key(p)));
+    let turned = (kept - places.len()) as u64;
+    notes
+        .left_off_found
+        .fetch_add(found.saturating_sub(twice + turned), Ordering::Relaxed);
+    if let Ok(mut all) = notes.left_off.lock() {
+        all.extend(places);
+    }
 }
 
 /// The octree, the leaves and their polygons, into a sink.

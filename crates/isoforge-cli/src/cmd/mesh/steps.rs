@@ -79,10 +79,10 @@ pub fn run(
             );
         }
         // Each step's own note: a sweep can thin a part below the lattice at some values.
-        if let Some(note) = made.thin_note()
-            && !global.quiet
-        {
-            eprintln!("note: {}: {note}", path.display());
+        for note in made.notes() {
+            if !global.quiet {
+                eprintln!("note: {}: {note}", path.display());
+            }
         }
         let mut j = crate::cmd::check::report_json(&path.display().to_string(), &report);
         j["value"] = json!(value);
@@ -90,6 +90,9 @@ pub fn run(
         j["depth"] = json!(made.depth);
         if let Some(held) = made.tolerance_held {
             j["tolerance_held"] = json!(held);
+        }
+        if let Some(places) = made.left_off {
+            j["left_off"] = places.to_json();
         }
         steps.push(j);
     }
