@@ -86,15 +86,16 @@ impl LeftOff {
     pub fn note(&self, tolerance: f64, depth: u8) -> Option<String> {
         (self.beyond > 0).then(|| {
             format!(
-                "the mesh misses the tolerance ({tolerance:.3e} mm) in {} place{} the splits \
-                 onto the surface had to leave (they would fold the mesh: the surface bends \
-                 or narrows within a cell or two there), by up to {:.3e} mm at {}; \
-                 --max-depth {} meshes finer until it holds, and `isoforge check MESH \
-                 --against MODEL` measures the whole mesh",
-                self.beyond,
-                if self.beyond == 1 { "" } else { "s" },
+                "the mesh misses the tolerance ({tolerance:.3e} mm): it is {:.3e} mm from the \
+                 surface at {}, the farthest of {} place{} beyond it that the splits onto the \
+                 surface had to leave (a split there would fold the mesh: the surface bends or \
+                 narrows within a cell or two); `isoforge check MESH --against MODEL` measures \
+                 the whole mesh, and --max-depth {} or deeper meshes finer until the tolerance \
+                 holds",
                 self.max,
                 super::point(self.at),
+                self.beyond,
+                if self.beyond == 1 { "" } else { "s" },
                 (depth + 2).min(isoforge_mesh::MAX_DEPTH)
             )
         })
