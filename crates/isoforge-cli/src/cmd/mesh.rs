@@ -302,7 +302,38 @@ pub(super) fn mesh_one(
     let made = loop {
         let began = Instant::now();
         let estimate = fitting_estimate(&loaded, &settings, available, args.no_memory_check)?;
-        let made = attempt::attempt(&job, settings.clone(), estimate, global)?;
+        let mut deeper = settings.clone();
+        deeper.depth += 1;
+        // A mesh that misses is dropped for the next depth when that one fits: then it can
+        // stop at its first miss.
+        let droppable = settings.depth < last
+            && fitting_estimate(&loaded, &deeper, available, args.no_memory_check).is_ok();
+        let made = match attempt::attempt(&job, settings.clone(), estimate, global, droppable)? {
+            attempt::Tried::Made(made) => *made,
+            attempt::Tried::Stopped {
+                deviation,
+                triangles,
+            } => {
+                tried.push(json!({
+                    "depth": settings.depth,
+                    "triangles": triangles,
+                    "max_deviation": deviation.max,
+                    "stopped": true,
+                    "seconds": began.elapsed().as_secs_f64(),
+                }));
+                if !global.quiet {
+                    eprintln!(
+                        "note: depth {}: the mesh is {:.3e} mm from the surface at {}                          (tolerance {tolerance:.3e} mm); stopped after {triangles} triangles,                          meshing again at depth {}",
+                        settings.depth,
+                        deviation.max,
+                        point(deviation.at),
+                        deeper.depth
+                    );
+                }
+                settings = deeper;
+                continue;
+            }
+        };
         let missed = made.deviation.filter(|d| !d.holds(tolerance));
         tried.push(json!({
             "depth": settings.depth,
@@ -315,8 +346,6 @@ pub(super) fn mesh_one(
             break made;
         }
         // The next depth must fit in memory too, else this mesh is the one kept.
-        let mut deeper = settings.clone();
-        deeper.depth += 1;
         if let Err(e) = fitting_estimate(&loaded, &deeper, available, args.no_memory_check) {
             if !global.quiet {
                 eprintln!("note: {e:#}; keeping the mesh at depth {}", settings.depth);

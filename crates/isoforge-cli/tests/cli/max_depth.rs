@@ -93,6 +93,47 @@ fn a_model_that_misses_its_tolerance_is_meshed_finer_until_it_holds() {
 }
 
 #[test]
+fn a_mesh_that_will_be_dropped_stops_at_its_first_miss() {
+    // sinus_bugs at depth 6: its bugs' legs are thinner than the lattice, and the first
+    // chunk of triangles measured already misses.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = fixtures().join("classic/sinus_bugs.rhai");
+    let plain = dir.path().join("plain.stl");
+    let (at6, _) = mesh_json(&model, &plain, &["--depth", "6"]);
+    let tolerance = at6["tolerance"].as_f64().expect("tolerance");
+    // The fault first: depth 6's whole mesh misses, by `check`.
+    let (j, _) = checked(&plain, &model, tolerance);
+    assert_eq!(j["tolerance_held"].as_bool(), Some(false), "{j}");
+
+    let out = dir.path().join("out.stl");
+    let (made, stderr) = mesh_json(&model, &out, &["--depth", "6", "--max-depth", "7"]);
+    let depths = made["depths"].as_array().expect("depths");
+    assert_eq!(depths.len(), 2, "{made}");
+    let first = &depths[0];
+    assert_eq!(first["stopped"].as_bool(), Some(true), "{made}");
+    assert!(first["max_deviation"].as_f64() > Some(tolerance), "{made}");
+    assert!(
+        first["triangles"].as_u64() <= at6["triangles"].as_u64(),
+        "{made}"
+    );
+    assert!(stderr.contains("depth 6: the mesh is"), "{stderr}");
+    assert!(stderr.contains("stopped after"), "{stderr}");
+    // The mesh kept is depth 7's, the same bytes as a plain run with that tolerance, and
+    // nothing of the stopped one is left beside it.
+    assert_eq!(made["depth"].as_u64(), Some(7), "{made}");
+    let again = dir.path().join("again.stl");
+    let t = tolerance.to_string();
+    mesh_json(&model, &again, &["--depth", "7", "--tolerance", &t]);
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["again.stl", "out.stl", "plain.stl"]);
+}
+
+#[test]
 fn a_model_that_holds_at_once_is_meshed_once_and_the_same() {
     let dir = tempfile::tempdir().expect("tempdir");
     let model = fixtures().join("bench/sphere.rhai");

@@ -4,6 +4,8 @@
 //! it writes this way).
 
 use std::io;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::{DVec3, Vec3};
 use isoforge_field::ClippedField;
@@ -23,6 +25,9 @@ pub struct DeviationSink<'f, S> {
     waiting: Vec<[DVec3; 3]>,
     out: Deviation,
     sums: Sums,
+    /// Set once a chunk measured is farther than the tolerance, when the caller asked
+    /// ([`DeviationSink::stop_on_miss`]); measuring stops then.
+    missed: Option<Arc<AtomicBool>>,
 }
 
 impl<'f, S: MeshSink> DeviationSink<'f, S> {
@@ -39,7 +44,23 @@ impl<'f, S: MeshSink> DeviationSink<'f, S> {
                 ..Deviation::default()
             },
             sums: Sums::default(),
+            missed: None,
         }
+    }
+
+    /// Sets `flag` (and measures no more) as soon as a measured point is farther than the
+    /// tolerance: a caller that will drop a mesh that misses needs no more than that, and
+    /// may pass the same flag to the mesher as its cancel flag to stop it too.
+    pub fn stop_on_miss(mut self, flag: Arc<AtomicBool>) -> Self {
+        self.missed = Some(flag);
+        self
+    }
+
+    /// Whether measuring stopped at a miss.
+    fn stopped(&self) -> bool {
+        self.missed
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::Relaxed))
     }
 
     /// The triangles waiting, measured.
@@ -63,11 +84,19 @@ impl<'f, S: MeshSink> DeviationSink<'f, S> {
             );
         }
         self.waiting.clear();
+        if let Some(flag) = &self.missed
+            && self.out.max > self.tolerance
+        {
+            flag.store(true, Ordering::Relaxed);
+        }
     }
 
-    /// The distance of everything that passed, and the inner sink.
+    /// The distance of everything that passed (of what passed until a miss, after
+    /// [`DeviationSink::stop_on_miss`]), and the inner sink.
     pub fn finish(mut self) -> (Deviation, S) {
-        self.measure();
+        if !self.stopped() {
+            self.measure();
+        }
         self.sums.finish(&mut self.out);
         (self.out, self.inner)
     }
@@ -80,6 +109,9 @@ impl<S: MeshSink> MeshSink for DeviationSink<'_, S> {
 
     fn triangle(&mut self, t: [u32; 3], corners: [[f32; 3]; 3]) -> io::Result<()> {
         self.inner.triangle(t, corners)?;
+        if self.stopped() {
+            return Ok(());
+        }
         self.waiting.push(corners.map(|p| Vec3::from(p).as_dvec3()));
         if self.waiting.len() == TRIANGLES {
             self.measure();
@@ -137,5 +169,33 @@ mod tests {
         assert!((d.max - (1.0 - 1.0 / 3f64.sqrt())).abs() < 1e-6, "{d:?}");
         assert!(!d.holds(0.35) && d.holds(0.5));
         assert_eq!(d.points_beyond, 8);
+    }
+
+    #[test]
+    fn a_miss_sets_the_flag_and_ends_the_measuring_but_not_the_passing_on() {
+        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+        let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
+        let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
+        let field = ClippedField::new(&ball, region);
+        let mut settings = crate::MeshSettings::new(region, 7);
+        settings.tolerance = Some(0.0);
+        let mesh = crate::mesh_shape(&ball, &settings);
+        // Missed at once (a tolerance no uniform mesh holds), and held (any mesh holds).
+        for (tolerance, misses) in [(1e-9, true), (f64::INFINITY, false)] {
+            let flag = Arc::new(AtomicBool::new(false));
+            let mut sink =
+                DeviationSink::new(Mesh::default(), &field, tolerance).stop_on_miss(flag.clone());
+            replay(&mesh, &mut sink);
+            assert_eq!(flag.load(Ordering::Relaxed), misses);
+            let (d, passed) = sink.finish();
+            assert_eq!(passed, mesh, "everything is passed on");
+            let measured = if misses {
+                TRIANGLES
+            } else {
+                mesh.triangles.len()
+            };
+            assert_eq!(d.samples, measured * SAMPLES, "{d:?}");
+            assert_eq!(d.max > tolerance, misses, "{d:?}");
+        }
     }
 }

@@ -5,6 +5,7 @@
 
 use std::path::Path;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{Context as _, Result, bail};
 use isoforge_field::ClippedField;
@@ -33,6 +34,20 @@ pub(super) struct Attempt {
     pub file: OutputFile,
 }
 
+/// How an attempt ended.
+pub(super) enum Tried {
+    /// The mesh is written (to commit or drop).
+    Made(Box<Attempt>),
+    /// A measured point missed the tolerance and the attempt was stopped there, as asked:
+    /// the temporary file is gone.
+    Stopped {
+        /// The distance of what was measured before the stop (`max` is the miss).
+        deviation: Deviation,
+        /// Triangles written before the stop.
+        triangles: u64,
+    },
+}
+
 /// What stays the same from one depth to the next.
 pub(super) struct Job<'a> {
     /// The model's file.
@@ -49,13 +64,16 @@ pub(super) struct Job<'a> {
 
 /// Meshes the job's model with `settings` into a new temporary file for its output,
 /// measured against the model when the job says so. `estimate` is the memory estimate the
-/// caller checked.
+/// caller checked. With `stop_on_miss` (and measuring), the mesher stops at the first
+/// point measured beyond the tolerance: a caller that drops such a mesh for a finer one
+/// saves the rest of the meshing and measuring.
 pub(super) fn attempt(
     job: &Job,
     settings: MeshSettings,
     estimate: Estimate,
     global: &Global,
-) -> Result<Attempt> {
+    stop_on_miss: bool,
+) -> Result<Tried> {
     let Job {
         model_path,
         loaded,
@@ -94,9 +112,26 @@ pub(super) fn attempt(
     let centre = [0, 1, 2].map(|a| (bounds.min[a] + bounds.max[a]) * 0.5);
     let written = if measure {
         let field = ClippedField::new(&loaded.model.shape, bounds);
-        let measured = DeviationSink::new(writer, &field, settings.effective_tolerance());
+        let mut measured = DeviationSink::new(writer, &field, settings.effective_tolerance());
+        // The sink's miss is the mesher's cancel flag: both stop.
+        let missed = Arc::new(AtomicBool::new(false));
+        if stop_on_miss {
+            settings.cancel = Some(missed.clone());
+            measured = measured.stop_on_miss(missed.clone());
+        }
         let mut sink = StreamCheck::new(measured, centre);
-        run(loaded, &settings, &mut sink, output)?;
+        let ran = run(loaded, &settings, &mut sink, output);
+        if missed.load(Ordering::Relaxed) {
+            bar.finish_and_clear();
+            let (report, measured) = sink.finish();
+            // (The writer goes with its temporary file.)
+            let (deviation, _) = measured.finish();
+            return Ok(Tried::Stopped {
+                deviation,
+                triangles: report.tally.triangles,
+            });
+        }
+        ran?;
         let (report, measured) = sink.finish();
         let (deviation, writer) = measured.finish();
         (report, Some(deviation), writer)
@@ -122,14 +157,14 @@ pub(super) fn attempt(
         .finish()
         .and_then(|buf| buf.into_inner().map_err(|e| e.into_error()))
         .with_context(|| format!("{}: cannot write the mesh", output.display()))?;
-    Ok(Attempt {
+    Ok(Tried::Made(Box::new(Attempt {
         settings,
         estimate,
         notes,
         report,
         deviation,
         file,
-    })
+    })))
 }
 
 /// The mesher into `sink`, its write errors named by the output file.
