@@ -75,10 +75,11 @@ def sweep_one(binary, path, extra, depth, finer, max_depth, workdir):
     check = run_json([binary, "check", stl, "--against", path, *extra,
                       "--tolerance", repr(tol), "--depth", str(depth), "--json"])
     os.remove(stl)
-    left = mesh.get("left_off") or {}
+    # (None with --max-depth, whose run measures the whole mesh instead.)
+    left = mesh.get("left_off")
     return {
-        "left": left.get("max_distance", 0.0) / tol,
-        "left_beyond": left.get("beyond_tolerance", 0),
+        "left": left and left["max_distance"] / tol,
+        "left_beyond": left and left["beyond_tolerance"],
         "triangles": mesh["triangles"],
         "seconds": mesh["seconds"],
         "depth": mesh["depth"],
@@ -116,20 +117,27 @@ def main():
                 mark += " NOT CLOSED AND MANIFOLD"
             # A place left off is a point of the mesh: farther than check's largest would
             # mean check missed it, or the place was not on the mesh written.
-            left_mark = " (beyond check's largest)" if r["left"] > r["max"] + 1e-9 else ""
-            print("| %s | %d | %d | %.2f | %.3f%s | %.3f | %d | %.3f (%d beyond)%s |" % (
+            if r["left"] is None:
+                left = "–"
+            else:
+                left = "%.3f (%d beyond)%s" % (
+                    r["left"], r["left_beyond"],
+                    " (beyond check's largest)" if r["left"] > r["max"] + 1e-9 else "")
+            print("| %s | %d | %d | %.2f | %.3f%s | %.3f | %d | %s |" % (
                 name, r["depth"], r["triangles"], r["seconds"], r["max"], mark, r["wide"],
-                r["narrow_points"], r["left"], r["left_beyond"], left_mark))
+                r["narrow_points"], left))
             sys.stdout.flush()
             t = tally.setdefault(group, [0, 0, 0, 0])
             t[0] += 1
             t[1] += r["held"]
             t[2] += r["held_wide"]
             # Whether the places left off told the miss (or the hold) right.
-            t[3] += r["held"] == (r["left_beyond"] == 0)
+            t[3] += r["left"] is not None and r["held"] == (r["left_beyond"] == 0)
     for group, (n, held, wide, told) in tally.items():
-        print("%s: the tolerance held on %d of %d, where wide on %d; the places left off "
-              "told it right on %d" % (group, held, n, wide, told))
+        line = "%s: the tolerance held on %d of %d, where wide on %d" % (group, held, n, wide)
+        if not a.max_depth:
+            line += "; the places left off told it right on %d" % told
+        print(line)
 
 
 if __name__ == "__main__":
