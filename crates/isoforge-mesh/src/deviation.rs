@@ -187,14 +187,19 @@ pub fn deviation_where_wide(
     out
 }
 
-/// The distance to the surface of each of `points`, measured as [`deviation_beyond`]
-/// measures a mesh's sample points: along the gradient line, and searched around for a
-/// nearer surface where that reads over `tolerance` (so a distance over it is truly over,
-/// up to the limit on points searched).
-pub fn distances_beyond(field: &ClippedField, points: &[[f64; 3]], tolerance: f64) -> Vec<f64> {
+/// The farthest of `points` from the surface, and its distance, measured as
+/// [`deviation`] measures a mesh's sample points: along the gradient line, and the largest
+/// searched around for a nearer surface until the largest left is one searched (so a few
+/// points are searched, not every one over a tolerance); `None` for no points.
+pub fn farthest(field: &ClippedField, points: &[[f64; 3]]) -> Option<(f64, [f64; 3])> {
     let mut found = distances_nearby(field, points);
-    refine_largest(field, points, &mut found, tolerance);
-    found.iter().map(|f| f.d).collect()
+    refine_largest(field, points, &mut found, f64::INFINITY);
+    found
+        .iter()
+        .zip(points)
+        .filter(|(f, _)| f.d.is_finite())
+        .max_by(|a, b| a.0.d.total_cmp(&b.0.d))
+        .map(|(f, p)| (f.d, *p))
 }
 
 /// Sample points per triangle.

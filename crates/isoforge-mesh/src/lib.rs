@@ -36,7 +36,7 @@ pub use dc::{
     estimate, estimate_bound, mesh_shape, mesh_shape_into, try_mesh_shape,
 };
 pub use deviation::{
-    Deviation, DeviationSink, deviation, deviation_beyond, deviation_where_wide, distances_beyond,
+    Deviation, DeviationSink, deviation, deviation_beyond, deviation_where_wide, farthest,
 };
 pub use io::{MeshFormat, MeshIoError, read_mesh, write_mesh};
 pub use mesh::Mesh;

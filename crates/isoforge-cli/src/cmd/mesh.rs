@@ -211,17 +211,13 @@ pub(super) struct Made {
     pub tolerance_held: Option<bool>,
     /// Without it: the places the splits left off the surface, measured.
     pub left_off: Option<left_off::LeftOff>,
-    /// The tolerance in millimetres.
-    pub tolerance: f64,
 }
 
 impl Made {
     /// The notes for the user: parts thinner than the lattice, places left off the
     /// surface.
     pub fn notes(&self) -> impl Iterator<Item = String> {
-        let left_off = self
-            .left_off
-            .and_then(|l| l.note(self.tolerance, self.depth));
+        let left_off = self.left_off.and_then(|l| l.note(self.depth));
         self.thin_note().into_iter().chain(left_off)
     }
 
@@ -323,7 +319,9 @@ pub(super) fn mesh_one(
                 }));
                 if !global.quiet {
                     eprintln!(
-                        "note: depth {}: the mesh is {:.3e} mm from the surface at {}                          (tolerance {tolerance:.3e} mm); stopped after {triangles} triangles,                          meshing again at depth {}",
+                        "note: depth {}: the mesh is {:.3e} mm from the surface at {} \
+                         (tolerance {tolerance:.3e} mm); stopped after {triangles} triangles, \
+                         meshing again at depth {}",
                         settings.depth,
                         deviation.max,
                         point(deviation.at),
@@ -444,7 +442,6 @@ pub(super) fn mesh_one(
         depth,
         tolerance_held: held,
         left_off,
-        tolerance,
     };
     for note in made.notes() {
         if !global.quiet {

@@ -47,10 +47,11 @@ fn a_plain_run_names_a_place_where_its_mesh_misses_the_tolerance() {
     let j: serde_json::Value = serde_json::from_slice(&stdout).expect("JSON");
     let tolerance = j["tolerance"].as_f64().expect("tolerance");
     let left = &j["left_off"];
-    let beyond = left["beyond_tolerance"].as_u64().expect("beyond_tolerance");
     let largest = left["max_distance"].as_f64().expect("max_distance");
-    assert!(beyond >= 1 && largest > tolerance, "{j}");
-    assert!(left["places"].as_u64() >= Some(beyond), "{j}");
+    assert!(largest > tolerance, "{j}");
+    assert_eq!(left["tolerance_missed"].as_bool(), Some(true), "{j}");
+    assert!(left["places"].as_u64() >= Some(1), "{j}");
+    assert_eq!(left["places"].as_u64(), left["measured"].as_u64(), "{j}");
     assert!(
         stderr.contains("misses the tolerance") && stderr.contains("--max-depth 9"),
         "{stderr}"
@@ -93,7 +94,11 @@ fn a_mesh_that_holds_has_no_place_beyond_and_no_note() {
     let out = dir.path().join("sphere.stl");
     let (stdout, stderr) = mesh(&model, &out, &["--json"]);
     let j: serde_json::Value = serde_json::from_slice(&stdout).expect("JSON");
-    assert_eq!(j["left_off"]["beyond_tolerance"].as_u64(), Some(0), "{j}");
+    assert_eq!(
+        j["left_off"]["tolerance_missed"].as_bool(),
+        Some(false),
+        "{j}"
+    );
     assert!(!stderr.contains("misses the tolerance"), "{stderr}");
     let tolerance = j["tolerance"].as_f64().expect("tolerance");
     let c = checked(&out, &model, tolerance);

@@ -26,11 +26,12 @@
 //! the turns per chunk are bounded, so it ends. Edges across a chunk's seam stay as they
 //! are. The vertices do not move and none is added: only which of them the triangles join.
 
-use std::collections::HashSet;
+use std::cell::RefCell;
 use std::io;
 
 use glam::DVec3;
 
+use super::left_off::LeftOff;
 use super::narrowed::Narrowed;
 use super::refine::{height, longest_side};
 use super::sampler::Sampler;
@@ -82,16 +83,9 @@ pub struct Flipper<'a, S: Sampler> {
     at: IntMap<u32, u32>,
     /// Edges turned so far.
     pub turned: u64,
-    /// Points that are no longer on the mesh: each turned edge's middle and its two
-    /// triangles' centres, as single-precision bits ([`place_key`]), so that a place the
-    /// refiner left off the surface there is not reported as the mesh's.
-    pub gone: HashSet<[u32; 3]>,
-}
-
-/// A point as a key that a sum taken in another order still matches (the single-precision
-/// bits of its coordinates).
-pub fn place_key(p: [f64; 3]) -> [u32; 3] {
-    p.map(|c| (c as f32).to_bits())
+    /// The places the refiner left off the surface (`left_off.rs`): a turn takes its
+    /// edge's middle and its two triangles' centres off the mesh.
+    left_off: Option<&'a RefCell<LeftOff>>,
 }
 
 impl<'a, S: Sampler> Flipper<'a, S> {
@@ -108,8 +102,14 @@ impl<'a, S: Sampler> Flipper<'a, S> {
             tris: Vec::new(),
             at: IntMap::default(),
             turned: 0,
-            gone: HashSet::new(),
+            left_off: None,
         }
+    }
+
+    /// Forgets, in `places`, the places its turns take off the mesh.
+    pub fn keeping_places(mut self, places: &'a RefCell<LeftOff>) -> Self {
+        self.left_off = Some(places);
+        self
     }
 
     /// Writes the last chunk; call once everything has come.
@@ -201,10 +201,13 @@ impl<'a, S: Sampler> Flipper<'a, S> {
             };
             // (a, b, c) and (b, a, d) become (a, d, c) and (d, b, c).
             let (c, d) = turn;
-            let p = |v: u32| DVec3::from(self.verts[v as usize].map(f64::from));
-            let (pa, pb, pc, pd) = (p(a), p(b), p(c), p(d));
-            for gone in [(pa + pb) * 0.5, (pa + pb + pc) / 3.0, (pb + pa + pd) / 3.0] {
-                self.gone.insert(place_key(gone.to_array()));
+            if let Some(places) = self.left_off {
+                let p = |v: u32| DVec3::from(self.verts[v as usize].map(f64::from));
+                let (pa, pb, pc, pd) = (p(a), p(b), p(c), p(d));
+                let mut places = places.borrow_mut();
+                for gone in [(pa + pb) * 0.5, (pa + pb + pc) / 3.0, (pb + pa + pd) / 3.0] {
+                    places.gone(gone.to_array());
+                }
             }
             for (u, v) in [(a, b), (b, a), (b, c), (c, a), (a, d), (d, b)] {
                 along.remove(&(u, v));

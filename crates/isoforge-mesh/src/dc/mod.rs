@@ -38,6 +38,7 @@ pub mod estimate;
 pub mod flips;
 pub mod hermite;
 pub mod leaf;
+pub mod left_off;
 pub mod merge;
 pub mod narrowed;
 pub mod octree;
@@ -112,10 +113,11 @@ pub struct MeshNotes {
     /// Small closed parts (a blob a cell or two wide, at a large tolerance) that came out
     /// inside out and were turned the right way out (`shells.rs`).
     pub parts_turned: AtomicU64,
-    /// Places on the mesh (a chord's middle, a triangle's centre) that the splits onto the
-    /// surface left off it, because every split there would fold the mesh or none could
-    /// be placed: where the mesh may miss the tolerance. Each once, at most 65,536 of
-    /// them; measure them with [`distances_beyond`](crate::distances_beyond).
+    /// Places on the mesh (a chord's middle, a triangle's centre, a vertex) that the
+    /// splits onto the surface left off it, because every split there would fold the mesh
+    /// or none could be placed: where the mesh may miss the tolerance. Each once, at most
+    /// 65,536 of them (`left_off.rs`); measure them with
+    /// [`farthest`](crate::farthest).
     pub left_off: Mutex<Vec<[f64; 3]>>,
     /// How many such places were found in all (more than [`MeshNotes::left_off`] holds
     /// when that is full).

@@ -66,6 +66,7 @@
 //! gyroid_sphere from 0.60 to 0.95 s (a stricter filter saved little and let curve_cyl's
 //! chords miss by 3.7 tolerances instead of 2.8); the diagonals cost about 10 % more.
 
+use std::cell::RefCell;
 use std::collections::{HashMap, HashSet, VecDeque};
 use std::io;
 
@@ -73,6 +74,7 @@ use glam::DVec3;
 
 use isoforge_field::Bounds;
 
+use super::left_off::LeftOff;
 use super::narrowed::Narrowed;
 use super::sampler::Sampler;
 use crate::int_hash::IntMap;
@@ -264,11 +266,6 @@ const OPPOSITE_COS: f64 = -0.95;
 /// slab by slab, and one moved onto the surface lands within a cell of where it was made.
 const RECENT_KEPT: usize = 1 << 18;
 
-/// Places left off the surface kept for the caller at most (24 bytes each): on the
-/// fixtures at depth 8 there are at most a few thousand (heart_shell 2,070, hull_mixed
-/// 4,339, spaceship 1,669).
-const LEFT_OFF_KEPT: usize = 1 << 16;
-
 /// Newton steps onto the surface at most.
 const NEWTON_STEPS: usize = 6;
 
@@ -351,14 +348,11 @@ pub struct Refiner<'a, S: Sampler> {
     /// [`LONG_CELLS`] long, its ends' normals more than 162° apart): there the part is
     /// thinner than the lattice resolves.
     pub thin_triangles: u64,
-    /// Places on the mesh farther from the surface than an edge splits for, left so
-    /// because every split there would fold the mesh or none could be placed (a chord's
-    /// middle, a triangle's centre), and the mesher's vertices that could not be moved
-    /// onto it: at most [`LEFT_OFF_KEPT`], in the order found; an edge asked about from
-    /// both sides may be here twice.
-    pub left_off: Vec<[f64; 3]>,
-    /// How many such places were found in all.
-    pub left_off_found: u64,
+    /// Where to keep the places on the mesh farther from the surface than an edge splits
+    /// for, left so because every split there would fold the mesh or none could be placed
+    /// (a chord's middle, a triangle's centre), and the mesher's vertices that could not
+    /// be moved onto it (`left_off.rs`); none kept without it.
+    left_off: Option<&'a RefCell<LeftOff>>,
 }
 
 /// What is known about one of the mesher's edges.
@@ -407,9 +401,14 @@ impl<'a, S: Sampler> Refiner<'a, S> {
             arrived: 0,
             across: IntMap::default(),
             thin_triangles: 0,
-            left_off: Vec::new(),
-            left_off_found: 0,
+            left_off: None,
         }
+    }
+
+    /// Keeps the places left off the surface in `places`.
+    pub fn keeping_places(mut self, places: &'a RefCell<LeftOff>) -> Self {
+        self.left_off = Some(places);
+        self
     }
 
     /// Writes the triangles still waiting for a neighbour (none, on a closed mesh); call
@@ -806,9 +805,8 @@ impl<'a, S: Sampler> Refiner<'a, S> {
 
     /// Records a place on the mesh left farther from the surface than the split threshold.
     fn leave_off(&mut self, p: DVec3) {
-        self.left_off_found += 1;
-        if self.left_off.len() < LEFT_OFF_KEPT {
-            self.left_off.push(p.to_array());
+        if let Some(places) = self.left_off {
+            places.borrow_mut().add(p.to_array());
         }
     }
 
@@ -1536,8 +1534,8 @@ mod left_off_tests {
     use glam::DVec3;
     use isoforge_field::{Bounds, ClippedField, Shape};
 
-    use crate::dc::flips::place_key;
-    use crate::deviation::{deviation, distances_beyond};
+    use crate::dc::left_off::place_key;
+    use crate::deviation::{deviation, farthest};
     use crate::{MeshNotes, MeshSettings, mesh_shape};
 
     /// The gyroid's value at the sheet's walls: its gradient is about 5 here, so the sheet
@@ -1569,7 +1567,7 @@ mod left_off_tests {
         let found = notes
             .left_off_found
             .load(std::sync::atomic::Ordering::Relaxed);
-        assert_eq!(found, places.len() as u64);
+        assert_eq!(found, places.len() as u64, "all kept, each once");
         let field = ClippedField::new(&shape, bounds);
         let tolerance = settings.effective_tolerance();
         let whole = deviation(&mesh, &field);
@@ -1597,14 +1595,15 @@ mod left_off_tests {
             places.len()
         );
 
-        // Measured, some miss the tolerance, and none by more than the whole mesh does
-        // (its sample points include every place).
-        let d = distances_beyond(&field, &places, tolerance);
-        let largest = d.iter().copied().fold(0.0, f64::max);
+        // Measured, the farthest misses the tolerance, by no more than the whole mesh does
+        // (its sample points include every place), and it is one of the mesh's farthest
+        // sample points' distances only if the whole measure found it there.
+        let (largest, at) = farthest(&field, &places).expect("places");
         assert!(
             largest > tolerance,
             "largest place {largest}, tolerance {tolerance}"
         );
         assert!(largest <= whole.max + 1e-12, "{largest} > {}", whole.max);
+        assert!(places.contains(&at));
     }
 }

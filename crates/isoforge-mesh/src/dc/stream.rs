@@ -9,7 +9,7 @@
 //! merges above the block level (`merge.rs`) decide the nodes whose last slab this was, and
 //! finish the polygons that waited for them. Slab z − 1 is then dropped.
 
-use std::collections::HashSet;
+use std::cell::RefCell;
 use std::io;
 use std::sync::atomic::Ordering;
 
@@ -17,16 +17,17 @@ use rayon::prelude::*;
 
 use super::contour::{self, Polygon, Ref};
 use super::decimate::{self, Decimator};
-use super::flips::{Flipper, place_key};
+use super::flips::Flipper;
 use super::hermite::{self, Crossing, EdgeRef, Scratch};
 use super::leaf::{self, BlockInput, BlockOut, LeafScratch, Merging, NO_VERT};
+use super::left_off::LeftOff;
 use super::merge::{AboveBlocks, Resolved};
 use super::octree::{Class, Grid, Octree};
 use super::pipe;
 use super::refine::Refiner;
 use super::sampler::{EvalPool, Sampler};
 use super::shells::SmallShells;
-use super::{MeshError, MeshNotes, MeshSettings, Reporter};
+use super::{MeshError, MeshSettings, Reporter};
 use crate::sink::MeshSink;
 
 /// A finished block: its leaves and cells, and the global indices its vertices got.
@@ -134,60 +135,42 @@ fn behind<S: Sampler>(
         .effective_tolerance()
         .min(settings.cell() * decimate::MAX_CELLS);
     let mut shells = SmallShells::new(sampler, settings.cell(), sink);
-    let mut flipper = Flipper::new(sampler, tolerance, settings.cell(), &mut shells);
+    let places = RefCell::new(LeftOff::default());
+    let mut flipper =
+        Flipper::new(sampler, tolerance, settings.cell(), &mut shells).keeping_places(&places);
     let mut refiner = Refiner::new(
         sampler,
         tolerance,
         &settings.bounds,
         settings.cell(),
         &mut flipper,
-    );
+    )
+    .keeping_places(&places);
     let mut decimator = Decimator::new(sampler, tolerance, settings.cell(), &mut refiner);
     feed(&mut decimator)?;
     decimator.finish().map_err(MeshError::Write)?;
     refiner.finish().map_err(MeshError::Write)?;
-    let left_off = std::mem::take(&mut refiner.left_off);
-    let left_off_found = refiner.left_off_found;
     let thin_triangles = refiner.thin_triangles;
     drop(refiner);
     flipper.finish().map_err(MeshError::Write)?;
+    drop(flipper);
+    shells.finish().map_err(MeshError::Write)?;
     if let Some(notes) = &settings.notes {
         notes
             .thin_triangles
             .fetch_add(thin_triangles, Ordering::Relaxed);
-        note_left_off(notes, left_off, left_off_found, &flipper.gone);
-    }
-    shells.finish().map_err(MeshError::Write)?;
-    if let Some(notes) = &settings.notes {
         notes
             .parts_turned
             .fetch_add(shells.turned, Ordering::Relaxed);
+        let places = places.into_inner();
+        notes
+            .left_off_found
+            .fetch_add(places.found, Ordering::Relaxed);
+        if let Ok(mut kept) = notes.left_off.lock() {
+            kept.extend(places.into_points());
+        }
     }
     Ok(())
-}
-
-/// Gives the notes the places the refiner left off the surface (`found` of them, `places`
-/// kept), each once, leaving out those the flips took off the mesh (`gone`).
-fn note_left_off(
-    notes: &MeshNotes,
-    mut places: Vec<[f64; 3]>,
-    found: u64,
-    gone: &HashSet<[u32; 3]>,
-) {
-    // An edge left whole is asked about from both sides.
-    let asked = places.len();
-    places.sort_unstable_by_key(|p| p.map(f64::to_bits));
-    places.dedup();
-    let twice = (asked - places.len()) as u64;
-    let kept = places.len();
-    places.retain(|&p| !gone.contains(&place_key(p)));
-    let turned = (kept - places.len()) as u64;
-    notes
-        .left_off_found
-        .fetch_add(found.saturating_sub(twice + turned), Ordering::Relaxed);
-    if let Ok(mut all) = notes.left_off.lock() {
-        all.extend(places);
-    }
 }
 
 /// The octree, the leaves and their polygons, into a sink.

@@ -13,7 +13,7 @@
 use std::sync::atomic::Ordering;
 
 use isoforge_field::ClippedField;
-use isoforge_mesh::{MeshNotes, MeshSettings, distances_beyond};
+use isoforge_mesh::{MeshNotes, MeshSettings, farthest};
 use serde_json::{Value, json};
 
 use crate::common::LoadedModel;
@@ -26,49 +26,38 @@ pub(in crate::cmd) struct LeftOff {
     /// Of them, those kept and measured (all, unless there were more than the mesher
     /// keeps).
     pub measured: usize,
-    /// Of those measured, how many are farther from the surface than the tolerance.
-    pub beyond: usize,
-    /// The farthest one's distance, and where it is.
+    /// The farthest one's distance from the surface (0 with none), where it is, and the
+    /// tolerance.
     pub max: f64,
     pub at: [f64; 3],
+    pub tolerance: f64,
 }
 
 impl LeftOff {
-    /// Measures the places the mesher noted against the model.
+    /// Measures the places the mesher noted against the model. Only the farthest is
+    /// searched around to be sure of its distance (a mesh with tens of thousands of places
+    /// beyond the tolerance, a shell thinner than the lattice, would otherwise take longer
+    /// to measure than to mesh).
     pub fn measure(loaded: &LoadedModel, settings: &MeshSettings, notes: &MeshNotes) -> LeftOff {
         let points = notes
             .left_off
             .lock()
             .map(|kept| kept.clone())
             .unwrap_or_default();
-        let tolerance = settings.effective_tolerance();
         let field = ClippedField::new(&loaded.model.shape, settings.bounds);
-        let distances = if points.is_empty() {
-            Vec::new()
-        } else {
-            distances_beyond(&field, &points, tolerance)
-        };
-        let mut out = LeftOff {
+        let (max, at) = farthest(&field, &points).unwrap_or((0.0, [0.0; 3]));
+        LeftOff {
             places: notes.left_off_found.load(Ordering::Relaxed),
             measured: points.len(),
-            beyond: 0,
-            max: 0.0,
-            at: [0.0; 3],
-        };
-        for (p, &d) in points.iter().zip(&distances) {
-            // Infinite: no surface found near a point the field says nothing useful at.
-            if !d.is_finite() {
-                continue;
-            }
-            if d > tolerance {
-                out.beyond += 1;
-            }
-            if d > out.max {
-                out.max = d;
-                out.at = *p;
-            }
+            max,
+            at,
+            tolerance: settings.effective_tolerance(),
         }
-        out
+    }
+
+    /// Whether a place is farther from the surface than the tolerance: the mesh misses it.
+    pub fn missed(&self) -> bool {
+        self.max > self.tolerance
     }
 
     /// For `--json`.
@@ -76,26 +65,26 @@ impl LeftOff {
         json!({
             "places": self.places,
             "measured": self.measured,
-            "beyond_tolerance": self.beyond,
             "max_distance": self.max,
             "max_distance_at": self.at,
+            "tolerance_missed": self.missed(),
         })
     }
 
-    /// The note for a mesh at `depth` with `tolerance`, when a place misses it.
-    pub fn note(&self, tolerance: f64, depth: u8) -> Option<String> {
-        (self.beyond > 0).then(|| {
+    /// The note for a mesh at `depth`, when a place misses the tolerance.
+    pub fn note(&self, depth: u8) -> Option<String> {
+        self.missed().then(|| {
             format!(
-                "the mesh misses the tolerance ({tolerance:.3e} mm): it is {:.3e} mm from the \
-                 surface at {}, the farthest of {} place{} beyond it that the splits onto the \
-                 surface had to leave (a split there would fold the mesh: the surface bends or \
-                 narrows within a cell or two); `isoforge check MESH --against MODEL` measures \
-                 the whole mesh, and --max-depth {} or deeper meshes finer until the tolerance \
-                 holds",
+                "the mesh misses the tolerance ({:.3e} mm): it is {:.3e} mm from the surface \
+                 at {}, the farthest of {} place{} where the splits onto the surface had to \
+                 stop (a split there would fold the mesh: the surface bends or narrows within \
+                 a cell or two); `isoforge check MESH --against MODEL` measures the whole \
+                 mesh, and --max-depth {} or deeper meshes finer until the tolerance holds",
+                self.tolerance,
                 self.max,
                 super::point(self.at),
-                self.beyond,
-                if self.beyond == 1 { "" } else { "s" },
+                self.places,
+                if self.places == 1 { "" } else { "s" },
                 (depth + 2).min(isoforge_mesh::MAX_DEPTH)
             )
         })
