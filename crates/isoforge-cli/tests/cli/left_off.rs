@@ -5,11 +5,8 @@
 
 use std::path::Path;
 
+use crate::max_depth::{checked, s};
 use crate::{fixtures, isoforge};
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("UTF-8 path")
-}
 
 /// `isoforge mesh MODEL --depth 7 -o OUT ARGS...`: stdout, stderr, asserting exit 0.
 fn mesh(model: &Path, out: &Path, extra: &[&str]) -> (Vec<u8>, String) {
@@ -19,21 +16,6 @@ fn mesh(model: &Path, out: &Path, extra: &[&str]) -> (Vec<u8>, String) {
     let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
     assert!(run.status.success(), "{extra:?}: {stderr}");
     (run.stdout, stderr)
-}
-
-/// `check OUT --against MODEL --tolerance T --json`.
-fn checked(out: &Path, model: &Path, tolerance: f64) -> serde_json::Value {
-    let t = tolerance.to_string();
-    let run = isoforge(&[
-        "check",
-        s(out),
-        "--against",
-        s(model),
-        "--tolerance",
-        &t,
-        "--json",
-    ]);
-    serde_json::from_slice(&run.stdout).expect("JSON")
 }
 
 #[test]
@@ -59,7 +41,7 @@ fn a_plain_run_names_a_place_where_its_mesh_misses_the_tolerance() {
 
     // `check` measures the whole mesh: it misses, by at least as much as the place says
     // (the place is a point of the mesh), and the place is on the mesh's bounds' side.
-    let c = checked(&out, &model, tolerance);
+    let (c, _) = checked(&out, &model, tolerance);
     assert_eq!(c["tolerance_held"].as_bool(), Some(false), "{c}");
     let whole = c["max_deviation"].as_f64().expect("max_deviation");
     assert!(largest <= whole + 1e-9, "place {largest} > mesh {whole}");
@@ -101,6 +83,6 @@ fn a_mesh_that_holds_has_no_place_beyond_and_no_note() {
     );
     assert!(!stderr.contains("misses the tolerance"), "{stderr}");
     let tolerance = j["tolerance"].as_f64().expect("tolerance");
-    let c = checked(&out, &model, tolerance);
+    let (c, _) = checked(&out, &model, tolerance);
     assert_eq!(c["tolerance_held"].as_bool(), Some(true), "{c}");
 }

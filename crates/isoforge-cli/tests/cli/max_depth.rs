@@ -6,7 +6,7 @@ use std::path::Path;
 
 use crate::{fixtures, isoforge};
 
-fn s(p: &Path) -> &str {
+pub(crate) fn s(p: &Path) -> &str {
     p.to_str().expect("UTF-8 path")
 }
 
@@ -22,7 +22,11 @@ fn mesh_json(model: &Path, out: &Path, extra: &[&str]) -> (serde_json::Value, St
 }
 
 /// `check OUT --against MODEL --tolerance T --json`: the report and the exit status.
-fn checked(out: &Path, model: &Path, tolerance: f64) -> (serde_json::Value, Option<i32>) {
+pub(crate) fn checked(
+    out: &Path,
+    model: &Path,
+    tolerance: f64,
+) -> (serde_json::Value, Option<i32>) {
     let t = tolerance.to_string();
     let run = isoforge(&[
         "check",

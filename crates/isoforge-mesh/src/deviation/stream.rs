@@ -127,17 +127,22 @@ mod tests {
     use crate::{Mesh, deviation_beyond, samples};
     use isoforge_field::{Bounds, Shape};
 
-    #[test]
-    fn measures_what_the_whole_mesh_measure_does_and_passes_it_on() {
+    /// The unit ball's field over [-2, 2]³, and its uniform mesh at depth 7: more triangles
+    /// than one chunk, so the sums run over chunks.
+    fn ball_in_chunks() -> (ClippedField, Mesh) {
         let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
         let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
         let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
-        let field = ClippedField::new(&ball, region);
-        // Uniform cells, for more triangles than one chunk: the sums run over chunks.
         let mut settings = crate::MeshSettings::new(region, 7);
         settings.tolerance = Some(0.0);
         let mesh = crate::mesh_shape(&ball, &settings);
         assert!(mesh.triangles.len() > TRIANGLES, "{}", mesh.triangles.len());
+        (ClippedField::new(&ball, region), mesh)
+    }
+
+    #[test]
+    fn measures_what_the_whole_mesh_measure_does_and_passes_it_on() {
+        let (field, mesh) = ball_in_chunks();
         for tolerance in [0.0, 1e-3, f64::INFINITY] {
             let mut sink = DeviationSink::new(Mesh::default(), &field, tolerance);
             replay(&mesh, &mut sink);
@@ -173,13 +178,7 @@ mod tests {
 
     #[test]
     fn a_miss_sets_the_flag_and_ends_the_measuring_but_not_the_passing_on() {
-        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
-        let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
-        let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
-        let field = ClippedField::new(&ball, region);
-        let mut settings = crate::MeshSettings::new(region, 7);
-        settings.tolerance = Some(0.0);
-        let mesh = crate::mesh_shape(&ball, &settings);
+        let (field, mesh) = ball_in_chunks();
         // Missed at once (a tolerance no uniform mesh holds), and held (any mesh holds).
         for (tolerance, misses) in [(1e-9, true), (f64::INFINITY, false)] {
             let flag = Arc::new(AtomicBool::new(false));
