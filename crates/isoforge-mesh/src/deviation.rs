@@ -190,17 +190,31 @@ pub fn deviation_where_wide(
 /// The farthest of `points` from the surface, and its distance, measured as
 /// [`deviation`] measures a mesh's sample points: along the gradient line, and the largest
 /// searched around for a nearer surface until the largest left is one searched (so a few
-/// points are searched, not every one over a tolerance); `None` for no points.
+/// points are searched, not every one over a tolerance). Only a distance to a point of the
+/// surface found counts: a point whose gradient line and search around found none keeps
+/// just the first-order estimate |F| / |∇F|, which where the field is no distance (an
+/// `offset` of a gyroid, a smooth blend) can read millimetres where the surface is a sheet
+/// too thin for the search's steps to see; such points are left out. `None` when no point
+/// is left (or after [`FARTHEST_ROUNDS`] such points in a row).
 pub fn farthest(field: &ClippedField, points: &[[f64; 3]]) -> Option<(f64, [f64; 3])> {
     let mut found = distances_nearby(field, points);
-    refine_largest(field, points, &mut found, f64::INFINITY);
-    found
-        .iter()
-        .zip(points)
-        .filter(|(f, _)| f.d.is_finite())
-        .max_by(|a, b| a.0.d.total_cmp(&b.0.d))
-        .map(|(f, p)| (f.d, *p))
+    for _ in 0..FARTHEST_ROUNDS {
+        refine_largest(field, points, &mut found, f64::INFINITY);
+        let (i, top) = found
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f.d.is_finite() && f.d > 0.0)
+            .max_by(|a, b| a.1.d.total_cmp(&b.1.d))?;
+        if !top.estimated {
+            return Some((top.d, points[i]));
+        }
+        found[i].d = 0.0;
+    }
+    None
 }
+
+/// Points whose distance is only an estimate left out of [`farthest`] at most, one a round.
+const FARTHEST_ROUNDS: usize = 16;
 
 /// Sample points per triangle.
 const SAMPLES: usize = 7;

@@ -7,8 +7,10 @@
 //! a cell or two, a sharp wedge): those middles are the places collected
 //! ([`isoforge_mesh::MeshNotes::left_off`]). Each is a point of the mesh; measured the way
 //! `check --against` measures the mesh's sample points, one farther than the tolerance is a
-//! place where the mesh misses it. The places do not cover everything `check` samples, so
-//! none beyond says nothing for sure: `check --against` is the measure.
+//! place where the mesh misses it by that measure (whose distances are those of a point of
+//! the surface found, searched around for a nearer one: a surface smaller than the search's
+//! steps can go unseen). The places do not cover everything `check` samples, so none beyond
+//! says nothing for sure: `check --against` measures the whole mesh.
 
 use std::sync::atomic::Ordering;
 
@@ -75,11 +77,12 @@ impl LeftOff {
     pub fn note(&self, depth: u8) -> Option<String> {
         self.missed().then(|| {
             format!(
-                "the mesh misses the tolerance ({:.3e} mm): it is {:.3e} mm from the surface \
-                 at {}, the farthest of {} place{} where the splits onto the surface had to \
-                 stop (a split there would fold the mesh: the surface bends or narrows within \
-                 a cell or two); `isoforge check MESH --against MODEL` measures the whole \
-                 mesh, and --max-depth {} or deeper meshes finer until the tolerance holds",
+                "the mesh misses the tolerance ({:.3e} mm): by `check --against`'s measure it \
+                 is {:.3e} mm from the surface at {}, the farthest of {} place{} where the \
+                 splits onto the surface had to stop (a split there would fold the mesh: the \
+                 surface bends or narrows within a cell or two); `isoforge check MESH \
+                 --against MODEL` measures the whole mesh, and --max-depth {} or deeper \
+                 meshes finer until the tolerance holds",
                 self.tolerance,
                 self.max,
                 super::point(self.at),
