@@ -295,15 +295,22 @@ pub(super) fn mesh_one(
     };
     let available = crate::machine::available_memory();
     let mut tried = Vec::new();
+    // The estimate for the depth meshed next, known from the depth before.
+    let mut fitted = None;
     let made = loop {
         let began = Instant::now();
-        let estimate = fitting_estimate(&loaded, &settings, available, args.no_memory_check)?;
+        let estimate = match fitted.take() {
+            Some(e) => e,
+            None => fitting_estimate(&loaded, &settings, available, args.no_memory_check)?,
+        };
         let mut deeper = settings.clone();
         deeper.depth += 1;
+        // Whether the next depth fits, below the last one.
+        let deeper_fits = (settings.depth < last)
+            .then(|| fitting_estimate(&loaded, &deeper, available, args.no_memory_check));
         // A mesh that misses is dropped for the next depth when that one fits: then it can
         // stop at its first miss.
-        let droppable = settings.depth < last
-            && fitting_estimate(&loaded, &deeper, available, args.no_memory_check).is_ok();
+        let droppable = matches!(deeper_fits, Some(Ok(_)));
         let made = match attempt::attempt(&job, settings.clone(), estimate, global, droppable)? {
             attempt::Tried::Made(made) => *made,
             attempt::Tried::Stopped {
@@ -328,6 +335,7 @@ pub(super) fn mesh_one(
                         deeper.depth
                     );
                 }
+                fitted = deeper_fits.and_then(Result::ok);
                 settings = deeper;
                 continue;
             }
@@ -340,16 +348,17 @@ pub(super) fn mesh_one(
             "seconds": began.elapsed().as_secs_f64(),
         }));
         let Some(missed) = missed else { break made };
-        if settings.depth == last {
-            break made;
-        }
         // The next depth must fit in memory too, else this mesh is the one kept.
-        if let Err(e) = fitting_estimate(&loaded, &deeper, available, args.no_memory_check) {
-            if !global.quiet {
-                eprintln!("note: {e:#}; keeping the mesh at depth {}", settings.depth);
+        let next = match deeper_fits {
+            None => break made,
+            Some(Err(e)) => {
+                if !global.quiet {
+                    eprintln!("note: {e:#}; keeping the mesh at depth {}", settings.depth);
+                }
+                break made;
             }
-            break made;
-        }
+            Some(Ok(e)) => e,
+        };
         if !global.quiet {
             eprintln!(
                 "note: depth {}: the mesh is up to {:.3e} mm from the surface (tolerance \
@@ -360,6 +369,7 @@ pub(super) fn mesh_one(
                 deeper.depth
             );
         }
+        fitted = Some(next);
         settings = deeper;
     };
     let attempt::Attempt {

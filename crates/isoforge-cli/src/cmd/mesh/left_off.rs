@@ -36,7 +36,8 @@ pub(in crate::cmd) struct LeftOff {
 }
 
 impl LeftOff {
-    /// Measures the places the mesher noted against the model. Only the farthest is
+    /// Measures the places the mesher noted against the model (taking them from the
+    /// notes). Only the farthest is
     /// searched around to be sure of its distance (a mesh with tens of thousands of places
     /// beyond the tolerance, a shell thinner than the lattice, would otherwise take longer
     /// to measure than to mesh).
@@ -44,7 +45,7 @@ impl LeftOff {
         let points = notes
             .left_off
             .lock()
-            .map(|kept| kept.clone())
+            .map(|mut kept| std::mem::take(&mut *kept))
             .unwrap_or_default();
         let field = ClippedField::new(&loaded.model.shape, settings.bounds);
         let (max, at) = farthest(&field, &points).unwrap_or((0.0, [0.0; 3]));
