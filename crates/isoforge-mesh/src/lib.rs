@@ -33,7 +33,7 @@ pub mod sink;
 pub use check::{MeshReport, StreamCheck, StreamReport, check};
 pub use dc::{
     DEFAULT_TOLERANCE_CELLS, Estimate, MAX_DEPTH, MeshError, MeshNotes, MeshSettings, Progress,
-    estimate, estimate_bound, mesh_shape, mesh_shape_into, try_mesh_shape,
+    Refinement, estimate, estimate_bound, mesh_shape, mesh_shape_into, try_mesh_shape,
 };
 pub use deviation::{
     Deviation, DeviationSink, deviation, deviation_beyond, deviation_where_wide, farthest,

@@ -26,7 +26,7 @@
 //! crossing, so no other polygon can hold that diagonal.
 
 use super::cell::{CASES, case_key, edge_id, other_axes};
-use super::leaf::{BlockOut, CANDIDATE, CellOut, NO_VERT};
+use super::leaf::{BlockOut, CANDIDATE, CellOut, NO_VERT, OwnedEdge};
 use super::octree::Grid;
 
 /// Which vertex a polygon corner is, before it has a global index.
@@ -44,6 +44,9 @@ pub enum Ref {
     Candidate([i64; 3]),
     /// A vertex already given to the sink.
     Global(u32),
+    /// The vertex of one pair of an ambiguous fine face on a seam (`refined.rs`): the
+    /// face's normal axis and lowest corner on the fine lattice, and the pair.
+    SeamFace(u8, [i64; 3], u8),
 }
 
 /// One corner of a polygon.
@@ -83,20 +86,32 @@ impl Polygon {
 /// The 4 cells around an edge, as offsets along its two other axes, in counter-clockwise
 /// order seen from the edge's positive end; and for each step to the next cell, the axis
 /// crossed (0 = b, 1 = c) and which of the two cells has that face as its lower face.
-const AROUND: [(i64, i64); 4] = [(-1, -1), (0, -1), (0, 0), (-1, 0)];
-const STEPS: [(usize, usize); 4] = [(0, 1), (1, 2), (0, 2), (1, 3)];
+pub const AROUND: [(i64, i64); 4] = [(-1, -1), (0, -1), (0, 0), (-1, 0)];
+pub const STEPS: [(usize, usize); 4] = [(0, 1), (1, 2), (0, 2), (1, 3)];
 
-/// A cell with its block.
+/// A cell around a crossing edge, with its block.
 #[derive(Clone, Copy)]
-struct Around<'a> {
-    block: u32,
-    coords: [i64; 3],
-    out: &'a BlockOut,
-    cell: CellOut,
+pub struct Around<'a> {
+    /// The block's index (in the record list).
+    pub block: u32,
+    /// The block's coordinates (its own lattice's block units), for a candidate's leaf.
+    pub coords: [i64; 3],
+    /// The block's output.
+    pub out: &'a BlockOut,
+    /// The cell.
+    pub cell: CellOut,
+    /// The cell's own edge (`cell.rs` numbering) that the crossing edge lies on, which
+    /// picks a finest cell's patch and its faces' pairs. For a coarse cell around a fine
+    /// edge inside one of its faces (`refined.rs`), an edge of that face at an end of the
+    /// curve the fine edge lies on.
+    pub edge: usize,
+    /// True for a cell of the finer lattice of a refined block. A face vertex joins two
+    /// cells of one lattice only: a seam's fine faces are never ambiguous (`seam.rs`).
+    pub fine: bool,
 }
 
 impl Around<'_> {
-    fn leaf(&self, local_edge: usize) -> Slot {
+    fn leaf(&self) -> Slot {
         if self.cell.vert == CANDIDATE {
             return Slot {
                 r: Ref::Candidate(self.coords),
@@ -105,7 +120,7 @@ impl Around<'_> {
             };
         }
         let patch = if self.cell.finest {
-            u32::from(CASES[case_key(self.cell.signs, self.cell.joined)].edge_patch[local_edge])
+            u32::from(CASES[case_key(self.cell.signs, self.cell.joined)].edge_patch[self.edge])
         } else {
             0
         };
@@ -121,25 +136,31 @@ impl Around<'_> {
     }
 }
 
-/// The polygons of a block's own edges, appended to `out`. `neighbour(d)` gives the block
-/// index, coordinates and output of the block at offset `d` (each component −1 or 0), if
-/// it has surface. Returns the number of edges whose cells could not be found (zero unless
-/// a bug).
+/// What lies at an offset from a block, for [`polygons`].
+pub enum Near<'a> {
+    /// A block with its cells: index, coordinates and output.
+    Cells(u32, [i64; 3], &'a BlockOut),
+    /// No block with cells (empty, full, or not built).
+    Nothing,
+    /// A block of the other lattice (`refined.rs`): an edge beside it is a seam's.
+    Seam,
+}
+
+/// The polygons of a block's own edges, appended to `out`. `neighbour(d)` says what lies at
+/// offset `d` (each component −1 or 0). An edge with a block of the other lattice around it
+/// is a seam's and goes to `seams` instead, for `refined.rs`. Returns the number of edges
+/// whose cells could not be found (zero unless a bug).
 pub fn polygons<'a>(
     grid: &Grid,
     me: (u32, [i64; 3], &'a BlockOut),
-    neighbour: impl Fn([i64; 3]) -> Option<(u32, [i64; 3], &'a BlockOut)>,
+    neighbour: impl Fn([i64; 3]) -> Near<'a>,
     out: &mut Vec<Polygon>,
+    seams: &mut Vec<OwnedEdge>,
 ) -> usize {
     let b = grid.block as i64;
     let (me_block, me_coords, me_out) = me;
     let mut missing = 0;
-    let placeholder = Slot {
-        r: Ref::Global(0),
-        pos: [0.0; 3],
-        face: false,
-    };
-    for edge in &me_out.owned {
+    'edges: for edge in &me_out.owned {
         let a = edge.axis as usize;
         let (ab, ac) = other_axes(a);
         let mut cells: [Option<Around<'a>>; 4] = [None; 4];
@@ -157,7 +178,14 @@ pub fn polygons<'a>(
             let blk = if off == [0; 3] {
                 Some((me_block, me_coords, me_out))
             } else {
-                neighbour(off)
+                match neighbour(off) {
+                    Near::Cells(i, c, o) => Some((i, c, o)),
+                    Near::Nothing => None,
+                    Near::Seam => {
+                        seams.push(*edge);
+                        continue 'edges;
+                    }
+                }
             };
             let idx = (l[0] + b * (l[1] + b * l[2])) as u16;
             *slot = blk.and_then(|(block, coords, o)| {
@@ -166,6 +194,8 @@ pub fn polygons<'a>(
                     coords,
                     out: o,
                     cell: *c,
+                    edge: edge_id(a, usize::from(db == -1), usize::from(dc == -1)),
+                    fine: false,
                 })
             });
         }
@@ -173,63 +203,88 @@ pub fn polygons<'a>(
             missing += 1;
             continue;
         };
-        let cells = [c0, c1, c2, c3];
-        let local_edge =
-            |(db, dc): (i64, i64)| edge_id(a, usize::from(db == -1), usize::from(dc == -1));
-        let leaves: [Slot; 4] = std::array::from_fn(|q| cells[q].leaf(local_edge(AROUND[q])));
-        let same = |p: usize, q: usize| leaves[p].r == leaves[q].r;
-        // Distinct leaves around the edge; the polygon starts after a change of leaf.
-        let Some(start) = (0..4).find(|&q| !same(q, (q + 3) % 4)) else {
-            continue; // inside one leaf
-        };
-        let distinct = (0..4).filter(|&q| !same(q, (q + 3) % 4)).count();
-        if distinct < 3 {
-            continue; // inside a face between two leaves
+        if let Some(poly) = polygon(a, [c0, c1, c2, c3], edge.pos, edge.start_inside, |_| None) {
+            out.push(poly);
         }
-        let mut poly = Polygon {
-            slots: [placeholder; 8],
-            len: 0,
-            centre: edge.pos,
-        };
-        for step in 0..4 {
-            let q = (start + step) % 4;
-            let next = (q + 1) % 4;
-            if step == 0 || !same(q, (q + 3) % 4) {
-                poly.slots[poly.len as usize] = leaves[q];
-                poly.len += 1;
-            }
-            if same(q, next) {
-                continue;
-            }
-            // The face crossed from cell q to the next: a face vertex when it is an
-            // ambiguous finest face between two different leaves.
-            if !(cells[q].cell.finest || cells[next].cell.finest) {
-                continue;
-            }
-            let (step_axis, owner) = STEPS[q];
-            let m = if step_axis == 0 { ab } else { ac };
-            let o = &cells[owner];
-            if o.cell.face[m] != NO_VERT {
-                let pair = CASES[case_key(o.cell.signs, o.cell.joined)].lower_pair[m]
-                    [local_edge(AROUND[owner])];
-                let vert = o.cell.face[m] + u32::from(pair.min(1));
-                poly.slots[poly.len as usize] = Slot {
-                    r: Ref::Local {
-                        block: o.block,
-                        vert,
-                    },
-                    pos: o.out.vertices[vert as usize],
-                    face: true,
-                };
-                poly.len += 1;
-            }
-        }
-        if !edge.start_inside {
-            poly.corners_mut().reverse();
-        }
-        out.push(poly);
     }
     missing
+}
+
+/// The polygon of a crossing edge along `axis` from the vertices of the leaves of the four
+/// cells around it (in [`AROUND`] order), or `None` when the edge is no leaf's edge (inside
+/// one leaf, or inside a face between two). `centre` is the crossing; `start_inside` the
+/// sign of the edge's lower end, which sets the winding. A step from cell `q` to the next
+/// between cells of two lattices crosses a seam's fine face; `seam_face(q)` gives that
+/// face's vertex when it is ambiguous.
+pub fn polygon(
+    axis: usize,
+    cells: [Around<'_>; 4],
+    centre: [f32; 3],
+    start_inside: bool,
+    seam_face: impl Fn(usize) -> Option<Slot>,
+) -> Option<Polygon> {
+    let (ab, ac) = other_axes(axis);
+    let placeholder = Slot {
+        r: Ref::Global(0),
+        pos: [0.0; 3],
+        face: false,
+    };
+    let leaves: [Slot; 4] = std::array::from_fn(|q| cells[q].leaf());
+    let same = |p: usize, q: usize| leaves[p].r == leaves[q].r;
+    // Distinct leaves around the edge; the polygon starts after a change of leaf.
+    let start = (0..4).find(|&q| !same(q, (q + 3) % 4))?;
+    let distinct = (0..4).filter(|&q| !same(q, (q + 3) % 4)).count();
+    if distinct < 3 {
+        return None; // inside a face between two leaves
+    }
+    let mut poly = Polygon {
+        slots: [placeholder; 8],
+        len: 0,
+        centre,
+    };
+    for step in 0..4 {
+        let q = (start + step) % 4;
+        let next = (q + 1) % 4;
+        if step == 0 || !same(q, (q + 3) % 4) {
+            poly.slots[poly.len as usize] = leaves[q];
+            poly.len += 1;
+        }
+        if same(q, next) {
+            continue;
+        }
+        // The face crossed from cell q to the next: a face vertex when it is an
+        // ambiguous finest face between two different leaves.
+        if cells[q].fine != cells[next].fine {
+            if let Some(slot) = seam_face(q) {
+                poly.slots[poly.len as usize] = slot;
+                poly.len += 1;
+            }
+            continue;
+        }
+        if !(cells[q].cell.finest || cells[next].cell.finest) {
+            continue;
+        }
+        let (step_axis, owner) = STEPS[q];
+        let m = if step_axis == 0 { ab } else { ac };
+        let o = &cells[owner];
+        if o.cell.face[m] != NO_VERT {
+            let pair = CASES[case_key(o.cell.signs, o.cell.joined)].lower_pair[m][o.edge];
+            let vert = o.cell.face[m] + u32::from(pair.min(1));
+            poly.slots[poly.len as usize] = Slot {
+                r: Ref::Local {
+                    block: o.block,
+                    vert,
+                },
+                pos: o.out.vertices[vert as usize],
+                face: true,
+            };
+            poly.len += 1;
+        }
+    }
+    if !start_inside {
+        poly.corners_mut().reverse();
+    }
+    Some(poly)
 }
 
 /// The triangles of a polygon whose corners all have global indices: a fan around the

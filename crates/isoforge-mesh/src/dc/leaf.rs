@@ -207,7 +207,22 @@ pub struct BlockInput<'a> {
     pub crossings: &'a [Crossing],
     /// How far to merge.
     pub merging: Merging,
+    /// Whether the block may become one leaf whose fate its neighbours decide (a
+    /// [`Candidate`]); a refined block's fine blocks may not (`refined.rs`).
+    pub whole: bool,
+    /// The joined rule of a finest face that lies on a seam (`seam.rs`), by the cell's
+    /// lowest lattice corner, the face's axis and side; `None` elsewhere, where the field
+    /// decides.
+    pub seam_joined: Option<&'a SeamJoined<'a>>,
+    /// The block's faces that lie on a seam (bit `2 axis + side`): no leaf that touches one
+    /// merges. Where a fine leaf met a coarse one across an ambiguous fine face, two of
+    /// that face's edges had their polygons (the leaves on each side the same) and two did
+    /// not, and the face's vertices were left with one polygon each (a random seam test).
+    pub seam_sides: u8,
 }
+
+/// See [`BlockInput::seam_joined`].
+pub type SeamJoined<'a> = dyn Fn([i64; 3], usize, usize) -> Option<bool> + Sync + 'a;
 
 /// Interleaves the low `bits` bits of x, y, z (x lowest).
 fn morton(at: [usize; 3], bits: u32) -> u32 {
@@ -274,7 +289,8 @@ pub fn build<S: Sampler>(
                     }
                 }
                 let lattice = [base[0] + i as i64, base[1] + j as i64, base[2] + k as i64];
-                let joined = joined_faces(sampler, ev, root, grid, lattice, pattern);
+                let joined =
+                    joined_faces(sampler, ev, root, grid, lattice, pattern, input.seam_joined);
                 sc.surface.push(Surface {
                     code: morton([i, j, k], bits),
                     at: [i, j, k],
@@ -305,7 +321,7 @@ pub fn build<S: Sampler>(
     };
     let root = m.node(bits, 0, 0, sc.surface.len());
     match root {
-        Node::Leaf { qef, vertex } if !sc.surface.is_empty() => {
+        Node::Leaf { qef, vertex } if !sc.surface.is_empty() && input.whole => {
             let vertex = vertex.unwrap_or_else(|| m.finest_vertex(&sc.surface[0]));
             out.candidate = Some(Candidate {
                 signs: out.corners,
@@ -314,6 +330,15 @@ pub fn build<S: Sampler>(
             });
             for l in sc.leaf_of.iter_mut() {
                 *l = (CANDIDATE, false);
+            }
+        }
+        // One leaf that stays one: its vertex is the block's own.
+        Node::Leaf { vertex, .. } if !sc.surface.is_empty() => {
+            let vertex = vertex.unwrap_or_else(|| m.finest_vertex(&sc.surface[0]));
+            let vert = m.push_vertex(vertex);
+            let finest = bits == 0;
+            for l in sc.leaf_of.iter_mut() {
+                *l = (vert, finest);
             }
         }
         Node::Leaf { .. } => {}
@@ -475,6 +500,7 @@ fn joined_faces<S: Sampler>(
     grid: &Grid,
     at: [i64; 3],
     signs: u8,
+    seam: Option<&SeamJoined<'_>>,
 ) -> u8 {
     let ambiguous = CASES[usize::from(signs)].ambiguous;
     let mut joined = 0;
@@ -484,18 +510,30 @@ fn joined_faces<S: Sampler>(
             if ambiguous & bit == 0 {
                 continue;
             }
+            if let Some(rule) = seam.and_then(|f| f(at, n, side)) {
+                if rule {
+                    joined |= bit;
+                }
+                continue;
+            }
             let mut lo = at;
             lo[n] += side as i64;
-            let mut middle = grid.corner(lo);
-            let (b, c) = other_axes(n);
-            middle[b] += 0.5 * grid.cell;
-            middle[c] += 0.5 * grid.cell;
-            if sampler.grad(ev, root, middle)[0] < 0.0 {
+            if sampler.grad(ev, root, face_middle(grid, lo, n))[0] < 0.0 {
                 joined |= bit;
             }
         }
     }
     joined
+}
+
+/// The middle of the lattice face normal to `n` whose lowest corner is `lo`: where the
+/// joined rule reads the field, here and on seams (`refined.rs`), so both read alike.
+pub fn face_middle(grid: &Grid, lo: [i64; 3], n: usize) -> [f64; 3] {
+    let mut middle = grid.corner(lo);
+    let (b, c) = other_axes(n);
+    middle[b] += 0.5 * grid.cell;
+    middle[c] += 0.5 * grid.cell;
+    middle
 }
 
 /// The square of the lower face of `axis` of the cell at local `at` of the block whose
@@ -842,6 +880,15 @@ impl<S: Sampler> Merger<'_, '_, S> {
             for (a, v) in lo_cell.iter_mut().enumerate() {
                 *v |= ((code >> (3 * bit + a as u32)) & 1) as usize * (1 << bit);
             }
+        }
+        let size = 1usize << level;
+        let touches = (0..3).any(|a| {
+            let sides = self.input.seam_sides >> (2 * a);
+            (sides & 1 == 1 && lo_cell[a] == 0)
+                || (sides & 2 == 2 && lo_cell[a] + size == self.input.grid.block)
+        });
+        if touches {
+            return None;
         }
         let half = 1usize << (level - 1);
         let s = self.input.grid.block + 1;

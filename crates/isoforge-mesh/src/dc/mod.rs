@@ -35,6 +35,7 @@ pub mod cell;
 pub mod contour;
 pub mod decimate;
 pub mod estimate;
+pub mod fine;
 pub mod flips;
 pub mod hermite;
 pub mod leaf;
@@ -45,11 +46,15 @@ pub mod octree;
 pub mod pipe;
 pub mod qef;
 pub mod refine;
+pub mod refined;
 pub mod sampler;
+pub mod seam;
 pub mod shells;
 pub mod stream;
 pub mod topology;
 
+#[cfg(test)]
+mod refined_tests;
 #[cfg(test)]
 mod tests;
 
@@ -60,6 +65,7 @@ use std::sync::{Arc, Mutex};
 use isoforge_field::{Bounds, ClippedField, Shape};
 
 pub use estimate::{Estimate, estimate, estimate_bound};
+pub use refined::Refinement;
 
 use crate::mesh::Mesh;
 use crate::sink::MeshSink;
@@ -100,6 +106,9 @@ pub struct MeshSettings {
     pub cancel: Option<Arc<AtomicBool>>,
     /// Where to count what the mesher noticed on the way, for the caller to tell.
     pub notes: Option<Arc<MeshNotes>>,
+    /// Blocks to sample on a finer lattice (`refined.rs`); `None` samples every block at
+    /// the finest level.
+    pub refine: Option<Arc<Refinement>>,
 }
 
 /// What the mesher noticed on the way.
@@ -134,6 +143,10 @@ impl fmt::Debug for MeshSettings {
             .field("progress", &self.progress.is_some())
             .field("cancel", &self.cancel.is_some())
             .field("notes", &self.notes)
+            .field(
+                "refine",
+                &self.refine.as_ref().map(|r| (r.levels, r.blocks.len())),
+            )
             .finish()
     }
 }
@@ -150,6 +163,7 @@ impl MeshSettings {
             progress: None,
             cancel: None,
             notes: None,
+            refine: None,
         }
     }
 

@@ -169,6 +169,79 @@ impl<L: Clone + Send + Sync> Octree<L> {
     }
 }
 
+/// What a fine block of a refined block is (`refined.rs`).
+#[derive(Clone, Debug)]
+pub enum Sub<L> {
+    /// Every point outside.
+    Empty,
+    /// Every point inside.
+    Full,
+    /// May hold surface; the field narrowed to it.
+    Block(L),
+}
+
+/// The fine blocks of the block at `coords` (coarse block units) on `fine`, a lattice
+/// `levels` finer than the one the block was found on, pruned by intervals from the block's
+/// own narrowed field `local`. `2^(3 levels)` of them, `i + m (j + m k)` for fine block
+/// `(i, j, k)` of the `m = 2^levels` a side.
+pub fn refine_block<S: Sampler>(
+    sampler: &S,
+    fine: Grid,
+    levels: u32,
+    coords: [i64; 3],
+    local: &S::Local,
+) -> Vec<Sub<S::Local>> {
+    let pool = EvalPool::new(sampler);
+    let ctx = BuildCtx {
+        sampler,
+        pool: &pool,
+        grid: fine,
+    };
+    let m = 1usize << levels;
+    let mut out: Vec<Sub<S::Local>> = (0..m * m * m).map(|_| Sub::Empty).collect();
+    let start = fine.block_level - levels;
+    let built = ctx.build(start, coords, local);
+    let base = coords.map(|c| c << levels);
+    fill_subs(built, coords, levels, base, m, &mut out);
+    out
+}
+
+/// Writes a built subtree's fine blocks into their places (`refine_block`'s order).
+fn fill_subs<L>(
+    built: Built<L>,
+    coords: [i64; 3],
+    depth_left: u32,
+    base: [i64; 3],
+    m: usize,
+    out: &mut [Sub<L>],
+) {
+    let put = |c: [i64; 3]| -> usize {
+        let l = [0, 1, 2].map(|a| (c[a] - base[a]) as usize);
+        l[0] + m * (l[1] + m * l[2])
+    };
+    // Every fine block under `coords`, for a node that is the same all through.
+    let span = |coords: [i64; 3], depth_left: u32| {
+        let n = 1i64 << depth_left;
+        let lo = coords.map(|c| c << depth_left);
+        (0..n * n * n).map(move |k| [lo[0] + k % n, lo[1] + (k / n) % n, lo[2] + k / (n * n)])
+    };
+    match built {
+        Built::Empty => {}
+        Built::Full => {
+            for c in span(coords, depth_left) {
+                out[put(c)] = Sub::Full;
+            }
+        }
+        Built::Block(local) => out[put(coords)] = Sub::Block(local),
+        Built::Branch(children) => {
+            for (c, child) in children.into_iter().enumerate() {
+                let cc = [0, 1, 2].map(|i| coords[i] * 2 + ((c as i64 >> i) & 1));
+                fill_subs(child, cc, depth_left - 1, base, m, out);
+            }
+        }
+    }
+}
+
 struct BuildCtx<'a, 's, S: Sampler> {
     sampler: &'s S,
     pool: &'a EvalPool<'s, S>,

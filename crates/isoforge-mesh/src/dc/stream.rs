@@ -15,8 +15,11 @@ use std::sync::atomic::Ordering;
 
 use rayon::prelude::*;
 
-use super::contour::{self, Polygon, Ref};
+use std::collections::HashMap;
+
+use super::contour::{self, Near, Polygon, Ref};
 use super::decimate::{self, Decimator};
+use super::fine::{FineState, Refined};
 use super::flips::Flipper;
 use super::hermite::{self, Crossing, EdgeRef, Scratch};
 use super::leaf::{self, BlockInput, BlockOut, LeafScratch, Merging, NO_VERT};
@@ -25,25 +28,27 @@ use super::merge::{AboveBlocks, Resolved};
 use super::octree::{Class, Grid, Octree};
 use super::pipe;
 use super::refine::Refiner;
+use super::refined::{self, Lattices};
 use super::sampler::{EvalPool, Sampler};
 use super::shells::SmallShells;
-use super::{MeshError, MeshSettings, Reporter};
+use super::{MAX_DEPTH, MeshError, MeshSettings, Reporter};
 use crate::sink::MeshSink;
 
 /// A finished block: its leaves and cells, and the global indices its vertices got.
-struct Record {
-    out: BlockOut,
-    ids: Vec<u32>,
+pub struct Record {
+    pub out: BlockOut,
+    pub ids: Vec<u32>,
 }
 
+/// One worker's buffers for a block's leaves.
 #[derive(Default)]
-struct Pass2Scratch {
-    scratch: Scratch,
-    leaf: LeafScratch,
-    signs: Vec<u8>,
-    edges: Vec<EdgeRef>,
-    slots: Vec<u32>,
-    crossings: Vec<Crossing>,
+pub struct Pass2Scratch {
+    pub scratch: Scratch,
+    pub leaf: LeafScratch,
+    pub signs: Vec<u8>,
+    pub edges: Vec<EdgeRef>,
+    pub slots: Vec<u32>,
+    pub crossings: Vec<Crossing>,
 }
 
 /// Meshes a sampled field into a sink; with merging on, through the edge collapses of
@@ -173,6 +178,14 @@ fn behind<S: Sampler>(
     Ok(())
 }
 
+/// What one block of a slab made in the leaf pass.
+enum Made {
+    /// A coarse block's leaves.
+    Coarse(u32, Box<BlockOut>),
+    /// A refined block's agreed coarse corner signs (its fine blocks come next).
+    Refined(u32, Vec<u8>),
+}
+
 /// The octree, the leaves and their polygons, into a sink.
 fn contour_into<S: Sampler>(
     sampler: &S,
@@ -209,6 +222,29 @@ fn contour_into<S: Sampler>(
         slab.sort_by_key(|&i| (coords[i as usize][1], coords[i as usize][0]));
     }
 
+    // Blocks sampled finer (`refined.rs`).
+    let levels = settings
+        .refine
+        .as_ref()
+        .map_or(0, |r| u32::from(r.levels.min(refined::MAX_LEVELS)));
+    let levels = if depth + levels <= u32::from(MAX_DEPTH) {
+        levels
+    } else {
+        0
+    };
+    let lat = Lattices::new(grid, levels);
+    let is_refined: Vec<bool> = coords
+        .iter()
+        .map(|c| {
+            levels > 0
+                && settings
+                    .refine
+                    .as_ref()
+                    .is_some_and(|r| r.blocks.contains(c))
+        })
+        .collect();
+    let mut fine = FineState::new(coords.len());
+
     let pool = EvalPool::new(sampler);
     // The whole field, for what cells on both sides of a block face must read alike.
     let root = sampler.root();
@@ -220,10 +256,21 @@ fn contour_into<S: Sampler>(
     let mut emitter = Emitter {
         sink,
         next: 0,
+        seam_faces: HashMap::new(),
         deferred: Vec::new(),
         tris: Vec::new(),
     };
     let report = Reporter::new(progress, coords.len(), 0.1, 0.99);
+    let refined = Refined {
+        sampler,
+        pool: &pool,
+        root: &root,
+        lat,
+        tree: &tree,
+        is_refined: &is_refined,
+        coords: &coords,
+        merging,
+    };
 
     let own_signs = |slab: &[u32], locals: &[Option<S::Local>]| -> Vec<(u32, Vec<u64>)> {
         slab.par_iter()
@@ -247,11 +294,11 @@ fn contour_into<S: Sampler>(
             )
             .collect()
     };
-
     if let Some(first) = slabs.first() {
         for (b, out) in own_signs(first, &locals) {
             bits[b as usize] = Some(out);
         }
+        refined.expand(first, &locals, &mut fine);
     }
     for z in 0..n {
         if cancelled() {
@@ -261,11 +308,12 @@ fn contour_into<S: Sampler>(
             for (b, out) in own_signs(&slabs[z + 1], &locals) {
                 bits[b as usize] = Some(out);
             }
+            refined.expand(&slabs[z + 1], &locals, &mut fine);
         }
-        // (2) This slab's leaves.
+        // (2) This slab's leaves; a refined block's agreed coarse signs.
         let empty: Vec<u64> = vec![0; words];
         let bits_of = |b: u32| -> &[u64] { bits[b as usize].as_deref().unwrap_or(&empty) };
-        let made: Vec<(u32, BlockOut)> = slabs[z]
+        let made: Vec<Made> = slabs[z]
             .par_iter()
             .map_init(
                 || (pool.take(), Pass2Scratch::default()),
@@ -276,6 +324,10 @@ fn contour_into<S: Sampler>(
                         tree.class([0, 1, 2].map(|i| c[i] + d[i]))
                     });
                     hermite::canonical_signs(&grid, &neighbours, bits_of, &mut sc.signs);
+                    if is_refined[b as usize] {
+                        report.tick();
+                        return Made::Refined(b, sc.signs.clone());
+                    }
                     let mut out = BlockOut::default();
                     if let Some(local) = &locals[b as usize] {
                         hermite::crossings(
@@ -298,6 +350,9 @@ fn contour_into<S: Sampler>(
                             edges: &sc.edges,
                             crossings: &sc.crossings,
                             merging,
+                            whole: true,
+                            seam_joined: None,
+                            seam_sides: 0,
                         };
                         leaf::build(
                             sampler,
@@ -309,46 +364,81 @@ fn contour_into<S: Sampler>(
                         );
                     }
                     report.tick();
-                    (b, out)
+                    Made::Coarse(b, Box::new(out))
                 },
             )
             .collect();
+        let mut refined_here = Vec::new();
+        for m in made {
+            match m {
+                Made::Coarse(b, out) => {
+                    above.add_block(coords[b as usize], out.candidate, !out.cells.is_empty());
+                    let ids = vec![NO_VERT; out.vertices.len()];
+                    records[b as usize] = Some(Record { out: *out, ids });
+                }
+                Made::Refined(b, signs) => {
+                    above.add_block(coords[b as usize], None, true);
+                    fine.set_coarse_signs(b, signs);
+                    refined_here.push(b);
+                }
+            }
+        }
+        if !refined_here.is_empty() {
+            refined.leaves(z as i64, &refined_here, &locals, &mut fine, &mut records);
+        }
         for &b in &slabs[z] {
             bits[b as usize] = None;
             locals[b as usize] = None;
         }
-        for (b, out) in made {
-            above.add_block(coords[b as usize], out.candidate, !out.cells.is_empty());
-            let ids = vec![NO_VERT; out.vertices.len()];
-            records[b as usize] = Some(Record { out, ids });
-        }
 
-        // (3) This slab's polygons, in block order.
+        // (3) This slab's polygons, in block order (a refined block's fine blocks in turn).
+        let cells = refined.cells(&fine, &records);
         let polys: Vec<Vec<Polygon>> = slabs[z]
             .par_iter()
-            .map(|&b| {
-                let mut polys = Vec::new();
-                let Some(me) = &records[b as usize] else {
-                    return polys;
-                };
-                let c = coords[b as usize];
-                let missing = contour::polygons(
-                    &grid,
-                    (b, c, &me.out),
-                    |d| {
-                        let nc = [0, 1, 2].map(|i| c[i] + d[i]);
-                        match tree.class(nc) {
-                            Class::Block(i) => {
-                                records[i as usize].as_ref().map(|r| (i, nc, &r.out))
+            .map_init(
+                || pool.take(),
+                |guard, &b| {
+                    let mut polys = Vec::new();
+                    let c = coords[b as usize];
+                    if is_refined[b as usize] {
+                        refined.polygons(&cells, &fine, b, &mut polys);
+                        return polys;
+                    }
+                    let Some(me) = &records[b as usize] else {
+                        return polys;
+                    };
+                    let mut beside = Vec::new();
+                    let missing = contour::polygons(
+                        &grid,
+                        (b, c, &me.out),
+                        |d| {
+                            let nc = [0, 1, 2].map(|i| c[i] + d[i]);
+                            match tree.class(nc) {
+                                Class::Block(i) if is_refined[i as usize] => Near::Seam,
+                                Class::Block(i) => match &records[i as usize] {
+                                    Some(r) => Near::Cells(i, nc, &r.out),
+                                    None => Near::Nothing,
+                                },
+                                _ => Near::Nothing,
                             }
-                            _ => None,
-                        }
-                    },
-                    &mut polys,
-                );
-                debug_assert_eq!(missing, 0, "edge without its 4 cells");
-                polys
-            })
+                        },
+                        &mut polys,
+                        &mut beside,
+                    );
+                    debug_assert_eq!(missing, 0, "edge without its 4 cells");
+                    if !beside.is_empty() || levels > 0 {
+                        refined.coarse_seam_polygons(
+                            guard.get(),
+                            &cells,
+                            &fine,
+                            b,
+                            &beside,
+                            &mut polys,
+                        );
+                    }
+                    polys
+                },
+            )
             .collect();
         for block_polys in polys {
             for poly in block_polys {
@@ -367,6 +457,7 @@ fn contour_into<S: Sampler>(
             for &b in &slabs[z - 1] {
                 records[b as usize] = None;
             }
+            fine.drop_slab(&slabs[z - 1], z as i64 - 1, &mut records);
         }
     }
     // Everything is decided once the last slab is: the leaves still waiting are final.
@@ -379,6 +470,8 @@ fn contour_into<S: Sampler>(
 struct Emitter<'s> {
     sink: &'s mut dyn MeshSink,
     next: u32,
+    /// Global indices of the seams' face vertices (`Ref::SeamFace`).
+    seam_faces: HashMap<(u8, [i64; 3], u8), u32>,
     /// Polygons waiting for a candidate's leaf (all their other corners global).
     deferred: Vec<Polygon>,
     tris: Vec<([u32; 3], [[f32; 3]; 3])>,
@@ -401,6 +494,18 @@ impl Emitter<'_> {
         above: &mut AboveBlocks,
     ) -> Result<(), MeshError> {
         for slot in poly.corners_mut() {
+            if let Ref::SeamFace(n, at, pair) = slot.r {
+                let id = match self.seam_faces.get(&(n, at, pair)) {
+                    Some(&id) => id,
+                    None => {
+                        let id = self.new_vertex(slot.pos)?;
+                        self.seam_faces.insert((n, at, pair), id);
+                        id
+                    }
+                };
+                slot.r = Ref::Global(id);
+                continue;
+            }
             if let Ref::Local { block, vert } = slot.r {
                 let Some(rec) = records[block as usize].as_mut() else {
                     continue;
@@ -468,7 +573,9 @@ impl Emitter<'_> {
             .map(|s| match s.r {
                 Ref::Global(id) => (id, s.pos, s.face),
                 // Not reachable: callers resolve every corner first.
-                Ref::Local { .. } | Ref::Candidate(_) => (NO_VERT, s.pos, s.face),
+                Ref::Local { .. } | Ref::Candidate(_) | Ref::SeamFace(..) => {
+                    (NO_VERT, s.pos, s.face)
+                }
             })
             .collect();
         if corners.iter().any(|c| c.0 == NO_VERT) {
