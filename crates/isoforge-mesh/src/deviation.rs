@@ -213,6 +213,22 @@ pub fn farthest(field: &ClippedField, points: &[[f64; 3]]) -> Option<(f64, [f64;
     None
 }
 
+/// The points of `points` farther than `tolerance` from the surface, with their distances,
+/// measured as [`deviation_beyond`] measures a mesh's sample points: along the gradient
+/// line, and each one over the tolerance searched around for a nearer surface (up to a
+/// limit of points searched). A point with nothing better than the first-order estimate
+/// counts with it, as it counts in [`Deviation::max`].
+pub fn beyond(field: &ClippedField, points: &[[f64; 3]], tolerance: f64) -> Vec<([f64; 3], f64)> {
+    let mut found = distances_nearby(field, points);
+    refine_largest(field, points, &mut found, tolerance);
+    points
+        .iter()
+        .zip(found)
+        .filter(|(_, f)| f.d > tolerance)
+        .map(|(p, f)| (*p, f.d))
+        .collect()
+}
+
 /// Points whose distance is only an estimate left out of [`farthest`] at most, one a round.
 const FARTHEST_ROUNDS: usize = 16;
 

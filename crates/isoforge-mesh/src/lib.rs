@@ -32,11 +32,12 @@ pub mod sink;
 
 pub use check::{MeshReport, StreamCheck, StreamReport, check};
 pub use dc::{
-    DEFAULT_TOLERANCE_CELLS, Estimate, MAX_DEPTH, MeshError, MeshNotes, MeshSettings, Progress,
-    Refinement, estimate, estimate_bound, mesh_shape, mesh_shape_into, try_mesh_shape,
+    DEFAULT_TOLERANCE_CELLS, Estimate, MAX_DEPTH, MAX_REFINE_LEVELS, MeshError, MeshNotes,
+    MeshSettings, Progress, Refinement, estimate, estimate_bound, mesh_shape, mesh_shape_into,
+    try_mesh_shape,
 };
 pub use deviation::{
-    Deviation, DeviationSink, deviation, deviation_beyond, deviation_where_wide, farthest,
+    Deviation, DeviationSink, beyond, deviation, deviation_beyond, deviation_where_wide, farthest,
 };
 pub use io::{MeshFormat, MeshIoError, read_mesh, write_mesh};
 pub use mesh::Mesh;

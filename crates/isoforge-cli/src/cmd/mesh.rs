@@ -8,6 +8,9 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::Args;
 use isoforge_mesh::{Estimate, MAX_DEPTH, MeshFormat, MeshSettings};
+
+/// The most levels finer a block may be sampled (`isoforge_mesh::Refinement`).
+const MAX_LEVELS: u8 = isoforge_mesh::MAX_REFINE_LEVELS;
 use serde_json::json;
 
 use crate::common::{Global, LoadedModel, ModelArgs, print_json};
@@ -17,8 +20,20 @@ use crate::machine::human_bytes;
 const DEFAULT_DEPTH: u8 = 8;
 
 mod attempt;
+mod finer;
 mod left_off;
 mod steps;
+
+/// Levels finer a run without `--depth` or `--resolution` may sample the blocks where the
+/// mesh misses the tolerance: down to depth 11 from the default 8 (docs/meshing.md).
+const AUTO_LEVELS: u8 = 3;
+
+/// The most fine blocks a run without `--max-depth` may add, as a multiple of its blocks.
+const AUTO_BUDGET: f64 = 3.0;
+
+/// The most fine blocks `--max-depth` may add, as a multiple of the blocks: about what
+/// meshing the whole model two levels finer would cost.
+const MAX_DEPTH_BUDGET: f64 = 15.0;
 
 /// Arguments of `isoforge mesh`.
 #[derive(Args, Clone, Debug)]
@@ -46,8 +61,10 @@ pub struct MeshArgs {
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
     /// Depth to go down to for the tolerance: each mesh is measured against the model by the
-    /// field and, while it misses the tolerance (in mm, the first depth's), the model is
-    /// meshed again one level finer, up to depth N.
+    /// field and, while it misses the tolerance (in mm, the first depth's), the blocks where
+    /// it misses are sampled finer, down to depth N there (at most 4 levels finer than the
+    /// first). Without --depth or --resolution, the mesh is refined where its own places say
+    /// it misses, down to 3 levels finer, unless this says otherwise.
     #[arg(long, value_name = "N")]
     max_depth: Option<u8>,
     /// Mesh even when the estimated memory is more than the machine has available.
@@ -205,9 +222,11 @@ pub(super) struct Made {
     pub triangles: u64,
     /// The finest cell's side.
     pub cell: f64,
-    /// The depth of the mesh written (with `--max-depth`, perhaps finer than asked).
+    /// The depth of the lattice the mesh was made on.
     pub depth: u8,
-    /// With `--max-depth`: whether the mesh holds the tolerance, measured by the field.
+    /// The levels finer the blocks where it missed were sampled (0 if none were).
+    pub refined_levels: u8,
+    /// When measured whole: whether the mesh holds the tolerance.
     pub tolerance_held: Option<bool>,
     /// Without it: the places the splits left off the surface, measured.
     pub left_off: Option<left_off::LeftOff>,
@@ -217,7 +236,7 @@ impl Made {
     /// The notes for the user: parts thinner than the lattice, places left off the
     /// surface.
     pub fn notes(&self) -> impl Iterator<Item = String> {
-        let left_off = self.left_off.and_then(|l| l.note(self.depth));
+        let left_off = self.left_off.as_ref().and_then(|l| l.note(self.depth));
         self.thin_note().into_iter().chain(left_off)
     }
 
@@ -264,17 +283,17 @@ pub(super) fn mesh_one(
     let mut settings = MeshSettings::new(bounds, depth);
     settings.threads = args.threads.unwrap_or(0);
     settings.tolerance = args.tolerance;
-    // With --max-depth the tolerance stays the first depth's in millimetres at every
-    // depth, and every mesh is measured against it.
+    // Refining keeps the tolerance the first lattice's in millimetres everywhere.
     let tolerance = settings.effective_tolerance();
-    let last = match args.max_depth {
-        None => depth,
+    let uniform = tolerance.is_nan() || tolerance <= 0.0;
+    let lattice_given = args.depth.is_some() || args.resolution.is_some();
+    let mut plan = match args.max_depth {
         Some(m) if m < depth => {
             return Err(crate::common::usage(format!(
                 "--max-depth {m}: below the depth meshed first ({depth})"
             )));
         }
-        Some(_) if tolerance.is_nan() || tolerance <= 0.0 => {
+        Some(_) if uniform => {
             return Err(crate::common::usage(
                 "--max-depth needs a tolerance above 0 (--tolerance 0 asks for uniform cells, \
                  with no distance to hold)"
@@ -282,96 +301,52 @@ pub(super) fn mesh_one(
             ));
         }
         Some(m) => {
-            settings.tolerance = Some(tolerance);
-            m
+            if m - depth > MAX_LEVELS && !global.quiet {
+                eprintln!(
+                    "note: --max-depth {m}: blocks are sampled at most {MAX_LEVELS} levels \
+                     finer than depth {depth}, down to depth {}",
+                    depth + MAX_LEVELS
+                );
+            }
+            finer::Plan {
+                levels: (m - depth).min(MAX_LEVELS),
+                measure: true,
+                budget: MAX_DEPTH_BUDGET,
+            }
         }
+        None => finer::Plan {
+            levels: if lattice_given || uniform {
+                0
+            } else {
+                AUTO_LEVELS.min(MAX_DEPTH - depth)
+            },
+            measure: false,
+            budget: AUTO_BUDGET,
+        },
     };
+    // Refining writes a mesh and may drop it for a finer one, which a pipe or a device
+    // cannot take back (`--max-depth` refuses them before any work, in `run`).
+    let regular = !std::fs::metadata(&output).is_ok_and(|m| !m.is_file());
+    if !regular {
+        plan.levels = 0;
+    }
+    if plan.levels > 0 {
+        settings.tolerance = Some(tolerance);
+    }
     let job = attempt::Job {
         model_path: &args.model.model,
         loaded: &loaded,
         format,
         output: &output,
-        measure: args.max_depth.is_some(),
     };
     let available = crate::machine::available_memory();
-    let mut tried = Vec::new();
-    // The estimate for the depth meshed next, known from the depth before.
-    let mut fitted = None;
-    let made = loop {
-        let began = Instant::now();
-        let estimate = match fitted.take() {
-            Some(e) => e,
-            None => fitting_estimate(&loaded, &settings, available, args.no_memory_check)?,
-        };
-        let mut deeper = settings.clone();
-        deeper.depth += 1;
-        // Whether the next depth fits, below the last one.
-        let deeper_fits = (settings.depth < last)
-            .then(|| fitting_estimate(&loaded, &deeper, available, args.no_memory_check));
-        // A mesh that misses is dropped for the next depth when that one fits: then it can
-        // stop at its first miss.
-        let droppable = matches!(deeper_fits, Some(Ok(_)));
-        let made = match attempt::attempt(&job, settings.clone(), estimate, global, droppable)? {
-            attempt::Tried::Made(made) => *made,
-            attempt::Tried::Stopped {
-                deviation,
-                triangles,
-            } => {
-                tried.push(json!({
-                    "depth": settings.depth,
-                    "triangles": triangles,
-                    "max_deviation": deviation.max,
-                    "stopped": true,
-                    "seconds": began.elapsed().as_secs_f64(),
-                }));
-                if !global.quiet {
-                    eprintln!(
-                        "note: depth {}: the mesh is {:.3e} mm from the surface at {} \
-                         (tolerance {tolerance:.3e} mm); stopped after {triangles} triangles, \
-                         meshing again at depth {}",
-                        settings.depth,
-                        deviation.max,
-                        point(deviation.at),
-                        deeper.depth
-                    );
-                }
-                fitted = deeper_fits.and_then(Result::ok);
-                settings = deeper;
-                continue;
-            }
-        };
-        let missed = made.deviation.filter(|d| !d.holds(tolerance));
-        tried.push(json!({
-            "depth": settings.depth,
-            "triangles": made.report.tally.triangles,
-            "max_deviation": made.deviation.map(|d| d.max),
-            "seconds": began.elapsed().as_secs_f64(),
-        }));
-        let Some(missed) = missed else { break made };
-        // The next depth must fit in memory too, else this mesh is the one kept.
-        let next = match deeper_fits {
-            None => break made,
-            Some(Err(e)) => {
-                if !global.quiet {
-                    eprintln!("note: {e:#}; keeping the mesh at depth {}", settings.depth);
-                }
-                break made;
-            }
-            Some(Ok(e)) => e,
-        };
-        if !global.quiet {
-            eprintln!(
-                "note: depth {}: the mesh is up to {:.3e} mm from the surface (tolerance \
-                 {tolerance:.3e} mm), at {}; meshing again at depth {}",
-                settings.depth,
-                missed.max,
-                point(missed.at),
-                deeper.depth
-            );
-        }
-        fitted = Some(next);
-        settings = deeper;
-    };
+    let fit = |s: &MeshSettings| fitting_estimate(&loaded, s, available, args.no_memory_check);
+    let finer::Rounds {
+        kept,
+        rounds,
+        places,
+        refined,
+    } = finer::run(&job, settings, plan, global, &fit)?;
     let attempt::Attempt {
         settings,
         estimate,
@@ -379,15 +354,15 @@ pub(super) fn mesh_one(
         report,
         deviation,
         file,
-    } = made;
+        ..
+    } = kept;
     let depth = settings.depth;
     file.commit()?;
     let thin_triangles = notes.thin_triangles.load(Ordering::Relaxed);
     let held = deviation.map(|d| d.holds(tolerance));
     // Measured whole, the mesh needs no hint.
-    let left_off = deviation
-        .is_none()
-        .then(|| left_off::LeftOff::measure(&loaded, &settings, &notes));
+    let left_off = if deviation.is_none() { places } else { None };
+    let refinement = settings.refine.clone();
     let seconds = start.elapsed().as_secs_f64();
     if global.json {
         let mut j = json!({
@@ -409,24 +384,40 @@ pub(super) fn mesh_one(
             "parts_turned": notes.parts_turned.load(Ordering::Relaxed),
             "seconds": seconds,
         });
-        if let Some(places) = left_off {
+        if let Some(places) = &left_off {
             j["left_off"] = places.to_json();
         }
+        if let Some(r) = &refinement {
+            j["refined"] = json!({
+                "levels": r.levels,
+                "blocks": r.blocks.len(),
+                "of_blocks": notes.blocks.load(Ordering::Relaxed),
+                "finest_depth": depth + r.levels,
+            });
+        }
+        if let Some(m) = args.max_depth {
+            j["max_depth"] = json!(m);
+        }
         if let Some(d) = deviation {
-            j["max_depth"] = json!(last);
             j["max_deviation"] = json!(d.max);
             j["max_deviation_at"] = json!(d.at);
             j["mean_deviation"] = json!(d.mean);
             j["tolerance_held"] = json!(held);
-            j["depths"] = json!(tried);
+        }
+        if args.max_depth.is_some() || refined {
+            j["rounds"] = json!(rounds);
         }
         print_json(&j);
     } else if !global.quiet {
         let measured = deviation
             .map(|d| format!(", up to {:.3e} mm off", d.max))
             .unwrap_or_default();
+        let finer = refinement
+            .as_ref()
+            .map(|r| format!(" ({} blocks {} levels finer)", r.blocks.len(), r.levels))
+            .unwrap_or_default();
         println!(
-            "{}: {} triangles, {} vertices, volume {:.6}, depth {depth}, tolerance {:.3e} mm{measured}, {:.2} s",
+            "{}: {} triangles, {} vertices, volume {:.6}, depth {depth}{finer}, tolerance {:.3e} mm{measured}, {:.2} s",
             output.display(),
             report.tally.triangles,
             report.tally.vertices,
@@ -438,11 +429,18 @@ pub(super) fn mesh_one(
     if let (Some(false), Some(d)) = (held, deviation)
         && !global.quiet
     {
+        let deeper = if plan.levels < MAX_LEVELS {
+            "; a larger --max-depth may hold it"
+        } else {
+            ""
+        };
+        let levels = refinement.as_ref().map_or(0, |r| r.levels);
         eprintln!(
             "note: the mesh misses the tolerance ({tolerance:.3e} mm) by up to {:.3e} mm, at \
-             {}, even at depth {depth}; a larger --max-depth may hold it",
+             {}, even sampled {levels} level{} finer where it missed{deeper}",
             d.max - tolerance,
-            point(d.at)
+            point(d.at),
+            if levels == 1 { "" } else { "s" }
         );
     }
     let made = Made {
@@ -450,6 +448,7 @@ pub(super) fn mesh_one(
         triangles: report.tally.triangles,
         cell: settings.cell(),
         depth,
+        refined_levels: refinement.as_ref().map_or(0, |r| r.levels),
         tolerance_held: held,
         left_off,
     };

@@ -347,9 +347,11 @@ fn a_ripple_tile_s_region_corner_holds_its_tolerance() {
 /// face read at its middle the tolerance holds wherever the model is two cells wide.
 #[test]
 fn gyroid_sphere_holds_its_tolerance_where_it_is_two_cells_wide() {
+    // At depth 8 given: a run without a depth is refined where it misses, and holds
+    // everywhere (max_depth.rs).
     holds_its_tolerance_where_wide_and_admesh_finds_nothing_to_fix(
         "bench/gyroid_sphere.rhai",
-        None,
+        Some("8"),
         1,
     );
 }
@@ -386,7 +388,7 @@ fn stacked_balls_groove_holds_its_tolerance() {
 fn stacked_balls_hold_their_tolerance_where_they_are_two_cells_wide() {
     holds_its_tolerance_where_wide_and_admesh_finds_nothing_to_fix(
         "classic/stacked_sphere_circle.rhai",
-        None,
+        Some("8"),
         1,
     );
 }

@@ -1,6 +1,9 @@
-//! `isoforge mesh --max-depth`: a mesh that misses its tolerance, measured by the field as it
-//! is written, is made again one level finer with the same tolerance in millimetres, and the
-//! one written holds it by `check --against` and is one ADMesh finds nothing to fix in.
+//! Finer where the mesh misses (`isoforge mesh`, `cmd/mesh/finer.rs`): a mesh that misses
+//! its tolerance is made again with the blocks around its misses sampled on a finer lattice,
+//! the tolerance the same in millimetres, round after round. With `--max-depth` every mesh
+//! is measured whole; without `--depth` or `--resolution` the first mesh's places tell.
+//! The mesh written holds its tolerance by `check --against`, and ADMesh finds nothing to
+//! fix in it.
 
 use std::path::Path;
 
@@ -43,10 +46,20 @@ pub(crate) fn checked(
     )
 }
 
+/// The files left in a folder, sorted.
+fn names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("folder")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
 #[test]
-fn a_model_that_misses_its_tolerance_is_meshed_finer_until_it_holds() {
+fn a_model_that_misses_its_tolerance_is_refined_where_it_misses_until_it_holds() {
     // curve_cyl at depth 7: where its two cylinders meet the cap, a wedge thinner than
-    // the lattice is cut off, 2.2 tolerances off; at depth 10 the same millimetres hold.
+    // the lattice is cut off, 2.2 tolerances off; two levels finer around it, it holds.
     let dir = tempfile::tempdir().expect("tempdir");
     let model = fixtures().join("classic/curve_cyl.rhai");
     let plain = dir.path().join("plain.stl");
@@ -63,22 +76,22 @@ fn a_model_that_misses_its_tolerance_is_meshed_finer_until_it_holds() {
     let out = dir.path().join("held.stl");
     let (made, _) = mesh_json(&model, &out, &["--depth", "7", "--max-depth", "10"]);
     assert_eq!(made["tolerance"].as_f64(), Some(tolerance), "{made}");
-    let depths = made["depths"].as_array().expect("depths");
-    let tried: Vec<u64> = depths
-        .iter()
-        .map(|d| d["depth"].as_u64().unwrap())
-        .collect();
-    assert_eq!(tried, [7, 8, 9, 10], "{made}");
+    let rounds = made["rounds"].as_array().expect("rounds");
+    assert!(rounds.len() >= 2, "{made}");
     // The first mesh measured is the plain run's, and it missed.
-    assert_eq!(depths[0]["triangles"], first["triangles"], "{made}");
+    assert_eq!(rounds[0]["triangles"], first["triangles"], "{made}");
+    assert_eq!(rounds[0]["levels"], 0, "{made}");
     assert!(
-        depths[0]["max_deviation"].as_f64().unwrap() > tolerance,
+        rounds[0]["max_deviation"].as_f64() > Some(tolerance),
         "{made}"
     );
-    assert_eq!(
-        (made["depth"].as_u64(), made["tolerance_held"].as_bool()),
-        (Some(10), Some(true))
-    );
+    assert!(rounds[0]["misses"].as_u64() > Some(0), "{made}");
+    // The one kept is refined, on the depth-7 lattice, and holds.
+    let refined = &made["refined"];
+    assert_eq!(made["depth"].as_u64(), Some(7), "{made}");
+    assert!(refined["levels"].as_u64() >= Some(1), "{made}");
+    assert!(refined["finest_depth"].as_u64() <= Some(10), "{made}");
+    assert_eq!(made["tolerance_held"].as_bool(), Some(true), "{made}");
     let measured = made["max_deviation"].as_f64().expect("max_deviation");
     assert!(measured <= tolerance, "{made}");
 
@@ -94,47 +107,28 @@ fn a_model_that_misses_its_tolerance_is_meshed_finer_until_it_holds() {
     let by_check = j["max_deviation"].as_f64().expect("max_deviation");
     assert!((by_check - measured).abs() <= 1e-9, "{by_check} {measured}");
     crate::sweeps::admesh_finds_nothing_to_fix_in_parts(&out, "curve_cyl", 1);
+    // The dropped rounds' files are gone.
+    assert_eq!(names(dir.path()), ["held.stl", "plain.stl"]);
 }
 
 #[test]
-fn a_mesh_that_will_be_dropped_stops_at_its_first_miss() {
-    // sinus_bugs at depth 6: its bugs' legs are thinner than the lattice, and the first
-    // chunk of triangles measured already misses.
+fn only_the_blocks_around_the_misses_are_refined() {
+    // sinus_bugs at depth 7: its legs and the ripples' crests are thinner than the
+    // lattice in a few places (a tenth of its blocks).
     let dir = tempfile::tempdir().expect("tempdir");
     let model = fixtures().join("classic/sinus_bugs.rhai");
-    let plain = dir.path().join("plain.stl");
-    let (at6, _) = mesh_json(&model, &plain, &["--depth", "6"]);
-    let tolerance = at6["tolerance"].as_f64().expect("tolerance");
-    // The fault first: depth 6's whole mesh misses, by `check`.
-    let (j, _) = checked(&plain, &model, tolerance);
-    assert_eq!(j["tolerance_held"].as_bool(), Some(false), "{j}");
-
     let out = dir.path().join("out.stl");
-    let (made, stderr) = mesh_json(&model, &out, &["--depth", "6", "--max-depth", "7"]);
-    let depths = made["depths"].as_array().expect("depths");
-    assert_eq!(depths.len(), 2, "{made}");
-    let first = &depths[0];
-    assert_eq!(first["stopped"].as_bool(), Some(true), "{made}");
-    assert!(first["max_deviation"].as_f64() > Some(tolerance), "{made}");
-    assert!(
-        first["triangles"].as_u64() <= at6["triangles"].as_u64(),
-        "{made}"
+    let (made, _) = mesh_json(&model, &out, &["--depth", "7", "--max-depth", "9"]);
+    let refined = &made["refined"];
+    let (blocks, of) = (
+        refined["blocks"].as_u64().expect("blocks"),
+        refined["of_blocks"].as_u64().expect("of_blocks"),
     );
-    assert!(stderr.contains("depth 6: the mesh is"), "{stderr}");
-    assert!(stderr.contains("stopped after"), "{stderr}");
-    // The mesh kept is depth 7's, the same bytes as a plain run with that tolerance, and
-    // nothing of the stopped one is left beside it.
-    assert_eq!(made["depth"].as_u64(), Some(7), "{made}");
-    let again = dir.path().join("again.stl");
-    let t = tolerance.to_string();
-    mesh_json(&model, &again, &["--depth", "7", "--tolerance", &t]);
-    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&again).unwrap());
-    let mut names: Vec<String> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    assert_eq!(names, ["again.stl", "out.stl", "plain.stl"]);
+    assert!(blocks > 0 && 4 * blocks < of, "{made}");
+    assert_eq!(made["tolerance_held"].as_bool(), Some(true), "{made}");
+    let tolerance = made["tolerance"].as_f64().expect("tolerance");
+    let (j, _) = checked(&out, &model, tolerance);
+    assert_eq!(j["tolerance_held"].as_bool(), Some(true), "{j}");
 }
 
 #[test]
@@ -144,8 +138,9 @@ fn a_model_that_holds_at_once_is_meshed_once_and_the_same() {
     let (plain, measured) = (dir.path().join("a.stl"), dir.path().join("b.stl"));
     mesh_json(&model, &plain, &["--depth", "6"]);
     let (made, stderr) = mesh_json(&model, &measured, &["--depth", "6", "--max-depth", "9"]);
-    assert_eq!(made["depths"].as_array().map(Vec::len), Some(1), "{made}");
+    assert_eq!(made["rounds"].as_array().map(Vec::len), Some(1), "{made}");
     assert_eq!(made["tolerance_held"], true, "{made}");
+    assert!(made.get("refined").is_none(), "{made}");
     assert!(stderr.is_empty(), "{stderr}");
     // Measuring on the way changes nothing written.
     assert_eq!(
@@ -155,45 +150,35 @@ fn a_model_that_holds_at_once_is_meshed_once_and_the_same() {
 }
 
 #[test]
-fn the_deepest_allowed_mesh_is_kept_with_a_note_when_it_still_misses() {
+fn the_best_mesh_is_kept_with_a_note_when_it_still_misses() {
+    // One level finer is not enough for curve_cyl's wedge at depth 7.
     let dir = tempfile::tempdir().expect("tempdir");
     let model = fixtures().join("classic/curve_cyl.rhai");
     let out = dir.path().join("out.stl");
-    let run = isoforge(&[
-        "mesh",
-        s(&model),
-        "-o",
-        s(&out),
-        "--depth",
-        "7",
-        "--max-depth",
-        "8",
-    ]);
-    assert_eq!(run.status.code(), Some(0));
-    let stderr = String::from_utf8_lossy(&run.stderr);
-    assert!(stderr.contains("depth 7: the mesh is up to"), "{stderr}");
-    assert!(stderr.contains("meshing again at depth 8"), "{stderr}");
+    let (made, stderr) = mesh_json(&model, &out, &["--depth", "7", "--max-depth", "8"]);
     assert!(stderr.contains("misses the tolerance"), "{stderr}");
-    assert!(stderr.contains("even at depth 8"), "{stderr}");
-    // What was written is the depth-8 mesh, and `check` agrees it misses.
-    let (j, status) = checked(&out, &model, 0.009375);
+    assert!(stderr.contains("1 level finer"), "{stderr}");
+    let tolerance = made["tolerance"].as_f64().expect("tolerance");
+    let rounds = made["rounds"].as_array().expect("rounds");
+    let kept = made["max_deviation"].as_f64().expect("max_deviation");
+    let best = rounds
+        .iter()
+        .filter_map(|r| r["max_deviation"].as_f64())
+        .fold(f64::INFINITY, f64::min);
+    assert_eq!(kept, best, "the nearest round is kept: {made}");
+    assert!(
+        kept < rounds[0]["max_deviation"].as_f64().unwrap(),
+        "{made}"
+    );
+    // What was written is that mesh, and `check` agrees it misses.
+    let (j, status) = checked(&out, &model, tolerance);
     assert_eq!(
         (j["tolerance_held"].as_bool(), status),
         (Some(false), Some(1)),
         "{j}"
     );
-    let (at8, _) = mesh_json(
-        &model,
-        &dir.path().join("at8.stl"),
-        &["--depth", "8", "--tolerance", "0.009375"],
-    );
-    assert_eq!(j["triangles"], at8["triangles"], "{j}");
-    // Nothing else is left in the folder: the dropped depth-7 mesh's file is gone.
-    let names: Vec<_> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    assert_eq!(names.len(), 2, "{names:?}");
+    assert_eq!(j["triangles"], made["triangles"], "{j}");
+    assert_eq!(names(dir.path()), ["out.stl"]);
 }
 
 #[test]
@@ -213,9 +198,8 @@ fn a_pipe_is_refused_before_any_work() {
 }
 
 #[test]
-fn each_step_of_a_parameter_range_finds_its_own_depth() {
-    // spiky_ball's spikes sharpen with their number: at depth 6 two spikes need depth 7,
-    // five need depth 8, for the same tolerance.
+fn each_step_of_a_parameter_range_is_refined_on_its_own() {
+    // spiky_ball's spikes sharpen with their number; at depth 6 both steps miss.
     let dir = tempfile::tempdir().expect("tempdir");
     let model = fixtures().join("modern/spiky_ball.rhai");
     let out = dir.path().join("ball.stl");
@@ -232,17 +216,12 @@ fn each_step_of_a_parameter_range_finds_its_own_depth() {
         ],
     );
     let steps = j["steps"].as_array().expect("steps");
-    let found: Vec<(u64, bool)> = steps
-        .iter()
-        .map(|s| {
-            (
-                s["depth"].as_u64().unwrap(),
-                s["tolerance_held"].as_bool().unwrap(),
-            )
-        })
-        .collect();
-    assert_eq!(found, [(7, true), (8, true)], "{j}");
-    // The step that went deepest holds by `check` too, at depth 6's tolerance.
+    for step in steps {
+        assert_eq!(step["depth"].as_u64(), Some(6), "{j}");
+        assert!(step["refined_levels"].as_u64() >= Some(1), "{j}");
+        assert_eq!(step["tolerance_held"].as_bool(), Some(true), "{j}");
+    }
+    // The sharper one holds by `check` too, at depth 6's tolerance.
     let tolerance = 28.0 / 64.0 * 0.1;
     let (c, status) = checked(&dir.path().join("ball-001.stl"), &model, tolerance);
     assert_eq!(
@@ -250,4 +229,64 @@ fn each_step_of_a_parameter_range_finds_its_own_depth() {
         (Some(true), Some(0)),
         "{c}"
     );
+}
+
+#[test]
+fn a_run_without_a_lattice_given_is_refined_where_its_places_miss() {
+    // The primitives example at depth 8: the cone's tip and a torus's inner rim are
+    // thinner than the lattice, 2.1 tolerances off.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = fixtures().join("../docs/examples/modern/primitives.rhai");
+    let at8 = dir.path().join("at8.stl");
+    let (plain, stderr) = mesh_json(&model, &at8, &["--depth", "8"]);
+    let tolerance = plain["tolerance"].as_f64().expect("tolerance");
+    // The fault first: the depth-8 lattice misses, its places say so, and `check` agrees.
+    assert_eq!(plain["left_off"]["tolerance_missed"], true, "{plain}");
+    assert!(stderr.contains("misses the tolerance"), "{stderr}");
+    assert!(plain.get("refined").is_none(), "{plain}");
+    let (c, _) = checked(&at8, &model, tolerance);
+    assert_eq!(c["tolerance_held"].as_bool(), Some(false), "{c}");
+
+    // Without --depth: the same lattice, refined where it missed, and measured.
+    let out = dir.path().join("out.stl");
+    let (made, stderr) = mesh_json(&model, &out, &[]);
+    assert_eq!(made["depth"].as_u64(), Some(8), "{made}");
+    assert_eq!(made["tolerance"].as_f64(), Some(tolerance), "{made}");
+    assert!(made["refined"]["levels"].as_u64() >= Some(1), "{made}");
+    assert_eq!(made["tolerance_held"].as_bool(), Some(true), "{made}");
+    assert!(!stderr.contains("misses the tolerance"), "{stderr}");
+    let (c, status) = checked(&out, &model, tolerance);
+    assert_eq!(
+        (c["tolerance_held"].as_bool(), status),
+        (Some(true), Some(0)),
+        "{c}"
+    );
+    crate::sweeps::admesh_finds_nothing_to_fix_in_parts(&out, "primitives", 7);
+    assert_eq!(names(dir.path()), ["at8.stl", "out.stl"]);
+}
+
+#[test]
+fn a_run_without_a_lattice_given_that_holds_is_the_plain_mesh() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = fixtures().join("bench/sphere.rhai");
+    let (default, at8) = (dir.path().join("a.stl"), dir.path().join("b.stl"));
+    let (made, _) = mesh_json(&model, &default, &[]);
+    mesh_json(&model, &at8, &["--depth", "8"]);
+    assert!(made.get("refined").is_none(), "{made}");
+    assert!(made.get("rounds").is_none(), "{made}");
+    assert_eq!(
+        std::fs::read(&default).unwrap(),
+        std::fs::read(&at8).unwrap()
+    );
+}
+
+#[test]
+fn a_device_output_is_meshed_once_and_not_refined() {
+    // A mesh sent to a device cannot be taken back for a refined one.
+    let model = fixtures().join("../docs/examples/modern/primitives.rhai");
+    let run = isoforge(&["mesh", s(&model), "-o", "/dev/null", "--json"]);
+    assert_eq!(run.status.code(), Some(0));
+    let j: serde_json::Value = serde_json::from_slice(&run.stdout).expect("JSON");
+    assert!(j.get("refined").is_none(), "{j}");
+    assert_eq!(j["left_off"]["tolerance_missed"], true, "{j}");
 }

@@ -46,7 +46,19 @@ pub fn estimate(shape: &Shape, settings: &MeshSettings) -> Estimate {
     let sampler = tape_sampler(shape, settings);
     let grid = Grid::new(&settings.bounds, u32::from(probe), BLOCK_SHIFT);
     let counted = Octree::build(&sampler, grid).blocks.len() as f64;
-    of_blocks(depth, counted * 4f64.powi(i32::from(depth - probe)))
+    of_blocks(
+        depth,
+        counted * 4f64.powi(i32::from(depth - probe)) + refined_blocks(settings),
+    )
+}
+
+/// The fine blocks a refinement adds: a refined block's surface crosses about `4^levels`
+/// of its `8^levels` fine blocks (as the blocks of a whole lattice grow from one depth to
+/// the next).
+fn refined_blocks(settings: &MeshSettings) -> f64 {
+    settings.refine.as_ref().map_or(0.0, |r| {
+        r.blocks.len() as f64 * 4f64.powi(i32::from(r.levels.min(super::refined::MAX_LEVELS)))
+    })
 }
 
 /// The most a mesh at the settings' depth can cost, whatever the shape: every block of the
@@ -55,7 +67,10 @@ pub fn estimate(shape: &Shape, settings: &MeshSettings) -> Estimate {
 pub fn estimate_bound(settings: &MeshSettings) -> Estimate {
     let depth = settings.depth.min(super::MAX_DEPTH);
     let per_side = 2f64.powi(i32::from(depth) - BLOCK_SHIFT.min(u32::from(depth)) as i32);
-    of_blocks(depth, per_side.powi(3))
+    let refined = settings.refine.as_ref().map_or(0.0, |r| {
+        r.blocks.len() as f64 * 8f64.powi(i32::from(r.levels.min(super::refined::MAX_LEVELS)))
+    });
+    of_blocks(depth, per_side.powi(3) + refined)
 }
 
 fn of_blocks(depth: u8, blocks: f64) -> Estimate {

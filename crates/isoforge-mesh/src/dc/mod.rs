@@ -65,7 +65,7 @@ use std::sync::{Arc, Mutex};
 use isoforge_field::{Bounds, ClippedField, Shape};
 
 pub use estimate::{Estimate, estimate, estimate_bound};
-pub use refined::Refinement;
+pub use refined::{MAX_LEVELS as MAX_REFINE_LEVELS, Refinement};
 
 use crate::mesh::Mesh;
 use crate::sink::MeshSink;
@@ -131,6 +131,11 @@ pub struct MeshNotes {
     /// How many such places were found in all (more than [`MeshNotes::left_off`] holds
     /// when that is full).
     pub left_off_found: AtomicU64,
+    /// Blocks of the lattice that intervals could not prove empty or full: what a run
+    /// samples, and what a refinement's cost is told against.
+    pub blocks: AtomicU64,
+    /// Of them, the blocks sampled on a finer lattice ([`MeshSettings::refine`]).
+    pub refined_blocks: AtomicU64,
 }
 
 impl fmt::Debug for MeshSettings {

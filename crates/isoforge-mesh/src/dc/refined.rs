@@ -33,23 +33,61 @@ use super::cell::{edge_id, other_axes};
 use super::contour::{AROUND, Around, Ref, STEPS, Slot};
 use super::hermite::corner_index;
 use super::leaf::{BlockOut, OwnedEdge, face_middle};
-use super::octree::Grid;
+use isoforge_field::Bounds;
+
+use super::octree::{BLOCK_SHIFT, Grid};
 use super::sampler::Sampler;
 use super::seam::{self, FaceSeam, NO_SEGMENT};
 
 /// Which blocks to sample finer, and how much finer.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Refinement {
-    /// Levels finer: the cells of a refined block are `2^levels` times smaller a side.
+    /// Levels finer: the cells of a refined block are `2^levels` times smaller a side (at
+    /// most [`MAX_LEVELS`], and never past [`MAX_DEPTH`](super::MAX_DEPTH) in all).
     pub levels: u8,
     /// The blocks (of [`BLOCK_SHIFT`](super::octree::BLOCK_SHIFT) cells a side at the
     /// settings' depth), by block coordinates.
     pub blocks: HashSet<[i64; 3]>,
 }
 
-/// The most levels a block may be refined by: 8 times finer a side is 512 times the
-/// samples of a block where the surface fills it.
-pub const MAX_LEVELS: u8 = 3;
+/// The most levels a block may be refined by: 16 times finer a side is 256 times the
+/// samples of a block where the surface crosses it (16³ fine blocks, pruned to those the
+/// surface passes through).
+pub const MAX_LEVELS: u8 = 4;
+
+impl Refinement {
+    /// The blocks within `margin` finest cells of any of `points` (on the lattice of
+    /// `depth` over `bounds`), each with the largest distance among the points near it:
+    /// the blocks to refine for the sample points of a mesh that miss a tolerance. The
+    /// margin takes in the block across a face the point is close to: a refined block's
+    /// seam keeps the coarse lattice's surface on it (`seam.rs`), so a miss just beside the
+    /// seam needs the block across refined too.
+    pub fn blocks_near(
+        bounds: &Bounds,
+        depth: u8,
+        points: &[([f64; 3], f64)],
+        margin: f64,
+    ) -> HashMap<[i64; 3], f64> {
+        let grid = Grid::new(bounds, u32::from(depth.min(super::MAX_DEPTH)), BLOCK_SHIFT);
+        let span = grid.cell * grid.block as f64;
+        let per_side = grid.blocks_per_side();
+        let reach = margin * grid.cell;
+        let mut out: HashMap<[i64; 3], f64> = HashMap::new();
+        for &(p, d) in points {
+            let lo = [0, 1, 2].map(|a| ((p[a] - reach - grid.origin[a]) / span).floor() as i64);
+            let hi = [0, 1, 2].map(|a| ((p[a] + reach - grid.origin[a]) / span).floor() as i64);
+            for z in lo[2].max(0)..=hi[2].min(per_side - 1) {
+                for y in lo[1].max(0)..=hi[1].min(per_side - 1) {
+                    for x in lo[0].max(0)..=hi[0].min(per_side - 1) {
+                        let e = out.entry([x, y, z]).or_insert(0.0);
+                        *e = e.max(d);
+                    }
+                }
+            }
+        }
+        out
+    }
+}
 
 /// The coarse and the fine lattice, and how their indices relate.
 #[derive(Clone, Copy, Debug)]

@@ -227,11 +227,7 @@ fn contour_into<S: Sampler>(
         .refine
         .as_ref()
         .map_or(0, |r| u32::from(r.levels.min(refined::MAX_LEVELS)));
-    let levels = if depth + levels <= u32::from(MAX_DEPTH) {
-        levels
-    } else {
-        0
-    };
+    let levels = levels.min(u32::from(MAX_DEPTH).saturating_sub(depth));
     let lat = Lattices::new(grid, levels);
     let is_refined: Vec<bool> = coords
         .iter()
@@ -244,6 +240,13 @@ fn contour_into<S: Sampler>(
         })
         .collect();
     let mut fine = FineState::new(coords.len());
+    if let Some(notes) = &settings.notes {
+        notes
+            .blocks
+            .fetch_add(coords.len() as u64, Ordering::Relaxed);
+        let refined = is_refined.iter().filter(|&&r| r).count() as u64;
+        notes.refined_blocks.fetch_add(refined, Ordering::Relaxed);
+    }
 
     let pool = EvalPool::new(sampler);
     // The whole field, for what cells on both sides of a block face must read alike.

@@ -28,6 +28,10 @@ pub struct DeviationSink<'f, S> {
     /// Set once a chunk measured is farther than the tolerance, when the caller asked
     /// ([`DeviationSink::stop_on_miss`]); measuring stops then.
     missed: Option<Arc<AtomicBool>>,
+    /// The sample points beyond the tolerance and their distances, when the caller asked
+    /// ([`DeviationSink::keeping_misses`]), at most `keep` of them.
+    misses: Vec<([f64; 3], f64)>,
+    keep: usize,
 }
 
 impl<'f, S: MeshSink> DeviationSink<'f, S> {
@@ -45,7 +49,24 @@ impl<'f, S: MeshSink> DeviationSink<'f, S> {
             },
             sums: Sums::default(),
             missed: None,
+            misses: Vec::new(),
+            keep: 0,
         }
+    }
+
+    /// Keeps up to `keep` of the sample points farther than the tolerance, with their
+    /// distances: where a finer lattice is needed (`isoforge mesh` refines the blocks
+    /// around them). Past `keep`, the farthest are kept.
+    pub fn keeping_misses(mut self, keep: usize) -> Self {
+        self.keep = keep;
+        self
+    }
+
+    /// The points kept by [`DeviationSink::keeping_misses`], farthest first.
+    pub fn take_misses(&mut self) -> Vec<([f64; 3], f64)> {
+        let mut out = std::mem::take(&mut self.misses);
+        out.sort_by(|a, b| b.1.total_cmp(&a.1));
+        out
     }
 
     /// Sets `flag` (and measures no more) as soon as a measured point is farther than the
@@ -83,6 +104,17 @@ impl<'f, S: MeshSink> DeviationSink<'f, S> {
                 |_| false,
             );
         }
+        if self.keep > 0 {
+            for (p, f) in points.iter().zip(&found) {
+                if f.d > self.tolerance {
+                    self.misses.push((*p, f.d));
+                }
+            }
+            if self.misses.len() > self.keep {
+                self.misses.sort_by(|a, b| b.1.total_cmp(&a.1));
+                self.misses.truncate(self.keep);
+            }
+        }
         self.waiting.clear();
         if let Some(flag) = &self.missed
             && self.out.max > self.tolerance
@@ -93,12 +125,20 @@ impl<'f, S: MeshSink> DeviationSink<'f, S> {
 
     /// The distance of everything that passed (of what passed until a miss, after
     /// [`DeviationSink::stop_on_miss`]), and the inner sink.
-    pub fn finish(mut self) -> (Deviation, S) {
+    pub fn finish(self) -> (Deviation, S) {
+        let (d, _, inner) = self.finish_with_misses();
+        (d, inner)
+    }
+
+    /// As [`DeviationSink::finish`], with the points kept by
+    /// [`DeviationSink::keeping_misses`], farthest first.
+    pub fn finish_with_misses(mut self) -> (Deviation, Vec<([f64; 3], f64)>, S) {
         if !self.stopped() {
             self.measure();
         }
         self.sums.finish(&mut self.out);
-        (self.out, self.inner)
+        let misses = self.take_misses();
+        (self.out, misses, self.inner)
     }
 }
 
@@ -159,6 +199,25 @@ mod tests {
                 "{d:?}"
             );
             assert!((d.area_beyond - whole.area_beyond).abs() < 1e-9, "{d:?}");
+        }
+    }
+
+    #[test]
+    fn the_points_beyond_are_kept_farthest_first() {
+        let (x, y, z) = (Shape::x(), Shape::y(), Shape::z());
+        let ball = (x.square() + y.square() + z.square()).sqrt() - 1.0;
+        let region = Bounds::new([-2.0; 3], [2.0; 3]).expect("box");
+        let field = ClippedField::new(&ball, region);
+        let mesh = samples::octahedron();
+        for keep in [1usize, 3, 100] {
+            let mut sink = DeviationSink::new(Mesh::default(), &field, 0.35).keeping_misses(keep);
+            replay(&mesh, &mut sink);
+            let (d, misses, _) = sink.finish_with_misses();
+            // Each face's centroid is beyond: eight of them at the sagitta.
+            assert_eq!(misses.len(), keep.min(d.points_beyond), "{keep}");
+            assert!(misses.iter().all(|m| m.1 > 0.35));
+            assert!(misses.windows(2).all(|w| w[0].1 >= w[1].1));
+            assert_eq!(misses[0].1, d.max);
         }
     }
 

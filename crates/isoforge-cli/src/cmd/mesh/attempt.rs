@@ -1,11 +1,11 @@
-//! One run of the mesher at one depth, into the output's temporary file: checked (closed,
-//! manifold) as it is written and, when `--max-depth` asks, measured against the model
-//! (`isoforge_mesh::DeviationSink`). Whether the file is then put in place is the
-//! caller's choice (`mesh.rs`): a mesh that misses the tolerance is dropped for a finer one.
+//! One run of the mesher, into the output's temporary file: checked (closed, manifold) as it
+//! is written and, when asked, measured against the model (`isoforge_mesh::DeviationSink`),
+//! the points beyond the tolerance kept. Whether the file is then put in place is the
+//! caller's choice (`finer.rs`): a mesh that misses the tolerance is dropped for one refined
+//! where it misses.
 
 use std::path::Path;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{Context as _, Result, bail};
 use isoforge_field::ClippedField;
@@ -30,25 +30,18 @@ pub(super) struct Attempt {
     pub report: StreamReport,
     /// The distance from the model's surface, when measured.
     pub deviation: Option<Deviation>,
+    /// When measured, the sample points beyond the tolerance (at most [`KEEP_MISSES`],
+    /// the farthest first) and their distances.
+    pub misses: Vec<([f64; 3], f64)>,
     /// The written file, to commit or drop.
     pub file: OutputFile,
 }
 
-/// How an attempt ended.
-pub(super) enum Tried {
-    /// The mesh is written (to commit or drop).
-    Made(Box<Attempt>),
-    /// A measured point missed the tolerance and the attempt was stopped there, as asked:
-    /// the temporary file is gone.
-    Stopped {
-        /// The distance of what was measured before the stop (`max` is the miss).
-        deviation: Deviation,
-        /// Triangles written before the stop.
-        triangles: u64,
-    },
-}
+/// Points beyond the tolerance kept from a measured mesh: enough to name every block that
+/// misses (a few thousand on the fixtures that miss at depth 8), few enough to hold.
+pub(super) const KEEP_MISSES: usize = 200_000;
 
-/// What stays the same from one depth to the next.
+/// What stays the same from one mesh of the model to the next.
 pub(super) struct Job<'a> {
     /// The model's file.
     pub model_path: &'a Path,
@@ -58,28 +51,23 @@ pub(super) struct Job<'a> {
     pub format: MeshFormat,
     /// The output file.
     pub output: &'a Path,
-    /// Whether each mesh is measured against the model.
-    pub measure: bool,
 }
 
-/// Meshes the job's model with `settings` into a new temporary file for its output,
-/// measured against the model when the job says so. `estimate` is the memory estimate the
-/// caller checked. With `stop_on_miss` (and measuring), the mesher stops at the first
-/// point measured beyond the tolerance: a caller that drops such a mesh for a finer one
-/// saves the rest of the meshing and measuring.
+/// Meshes the job's model with `settings` into a new temporary file for its output, and
+/// measures it against the model when `measure` says so. `estimate` is the memory estimate
+/// the caller checked.
 pub(super) fn attempt(
     job: &Job,
     settings: MeshSettings,
     estimate: Estimate,
     global: &Global,
-    stop_on_miss: bool,
-) -> Result<Tried> {
+    measure: bool,
+) -> Result<Attempt> {
     let Job {
         model_path,
         loaded,
         format,
         output,
-        measure,
     } = *job;
     // Before the work: a model given as its own output, a missing folder or a read-only
     // file is refused now, not after minutes of meshing.
@@ -87,11 +75,15 @@ pub(super) fn attempt(
     let mut settings = settings;
     let notes = Arc::new(MeshNotes::default());
     settings.notes = Some(notes.clone());
-    let bar = progress_bar(
-        global,
-        1000,
-        &format!("meshing at depth {}", settings.depth),
-    );
+    let what = match &settings.refine {
+        Some(r) => format!(
+            "meshing {} blocks {} levels finer",
+            r.blocks.len(),
+            r.levels
+        ),
+        None => format!("meshing at depth {}", settings.depth),
+    };
+    let bar = progress_bar(global, 1000, &what);
     let bar_cb = bar.clone();
     settings.progress = Some(Arc::new(move |f: f64| {
         bar_cb.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64)
@@ -112,37 +104,21 @@ pub(super) fn attempt(
     let centre = [0, 1, 2].map(|a| (bounds.min[a] + bounds.max[a]) * 0.5);
     let written = if measure {
         let field = ClippedField::new(&loaded.model.shape, bounds);
-        let mut measured = DeviationSink::new(writer, &field, settings.effective_tolerance());
-        // The sink's miss is the mesher's cancel flag: both stop.
-        let missed = Arc::new(AtomicBool::new(false));
-        if stop_on_miss {
-            settings.cancel = Some(missed.clone());
-            measured = measured.stop_on_miss(missed.clone());
-        }
+        let measured = DeviationSink::new(writer, &field, settings.effective_tolerance())
+            .keeping_misses(KEEP_MISSES);
         let mut sink = StreamCheck::new(measured, centre);
-        let ran = run(loaded, &settings, &mut sink, output);
-        if missed.load(Ordering::Relaxed) {
-            bar.finish_and_clear();
-            let (report, measured) = sink.finish();
-            // (The writer goes with its temporary file.)
-            let (deviation, _) = measured.finish();
-            return Ok(Tried::Stopped {
-                deviation,
-                triangles: report.tally.triangles,
-            });
-        }
-        ran?;
+        run(loaded, &settings, &mut sink, output)?;
         let (report, measured) = sink.finish();
-        let (deviation, writer) = measured.finish();
-        (report, Some(deviation), writer)
+        let (deviation, misses, writer) = measured.finish_with_misses();
+        (report, Some(deviation), misses, writer)
     } else {
         let mut sink = StreamCheck::new(writer, centre);
         run(loaded, &settings, &mut sink, output)?;
         let (report, writer) = sink.finish();
-        (report, None, writer)
+        (report, None, Vec::new(), writer)
     };
     bar.finish_and_clear();
-    let (report, deviation, writer) = written;
+    let (report, deviation, misses, writer) = written;
     if report.tally.triangles == 0 {
         bail!(
             "{}: nothing is inside the region {:?} to {:?} at depth {} (the field is not \
@@ -157,14 +133,15 @@ pub(super) fn attempt(
         .finish()
         .and_then(|buf| buf.into_inner().map_err(|e| e.into_error()))
         .with_context(|| format!("{}: cannot write the mesh", output.display()))?;
-    Ok(Tried::Made(Box::new(Attempt {
+    Ok(Attempt {
         settings,
         estimate,
         notes,
         report,
         deviation,
+        misses,
         file,
-    })))
+    })
 }
 
 /// The mesher into `sink`, its write errors named by the output file.

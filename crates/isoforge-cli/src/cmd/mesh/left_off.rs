@@ -21,7 +21,7 @@ use serde_json::{Value, json};
 use crate::common::LoadedModel;
 
 /// The measured places.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(in crate::cmd) struct LeftOff {
     /// Places found, each once.
     pub places: u64,
@@ -33,6 +33,8 @@ pub(in crate::cmd) struct LeftOff {
     pub max: f64,
     pub at: [f64; 3],
     pub tolerance: f64,
+    /// The places themselves, for a finer round to start from (`finer.rs`).
+    pub points: Vec<[f64; 3]>,
 }
 
 impl LeftOff {
@@ -55,6 +57,7 @@ impl LeftOff {
             max,
             at,
             tolerance: settings.effective_tolerance(),
+            points,
         }
     }
 
@@ -64,7 +67,7 @@ impl LeftOff {
     }
 
     /// For `--json`.
-    pub fn to_json(self) -> Value {
+    pub fn to_json(&self) -> Value {
         json!({
             "places": self.places,
             "measured": self.measured,

@@ -1,8 +1,8 @@
 //! `isoforge mesh --param t=0..1:N`: one mesh per step of a parameter range, `NAME-000.stl`
 //! upward. Each step is an ordinary `isoforge mesh` run with the parameter fixed; its file is
 //! then read back and checked, so the report is of what is on disk. A step whose mesh has
-//! parts thinner than the lattice gets the same note a single run does; with `--max-depth`
-//! each step finds its own depth, which the report gives.
+//! parts thinner than the lattice gets the same note a single run does; a step refined
+//! where it missed its tolerance (`finer.rs`) reports how many levels finer.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -88,10 +88,13 @@ pub fn run(
         j["value"] = json!(value);
         j["thin_triangles"] = json!(made.thin_triangles);
         j["depth"] = json!(made.depth);
+        if made.refined_levels > 0 {
+            j["refined_levels"] = json!(made.refined_levels);
+        }
         if let Some(held) = made.tolerance_held {
             j["tolerance_held"] = json!(held);
         }
-        if let Some(places) = made.left_off {
+        if let Some(places) = &made.left_off {
             j["left_off"] = places.to_json();
         }
         steps.push(j);
