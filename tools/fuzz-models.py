@@ -3,7 +3,7 @@
 outward, by hand.
 
     cargo build --release -p isoforge-cli
-    python3 tools/fuzz-models.py [--seed N] [--seconds S] [--out DIR]
+    python3 tools/fuzz-models.py [--seed N] [--seconds S] [--out DIR] [--refine]
 
 Each case is a random tree three levels deep of unions, intersections, differences (plain
 and smooth), `offset` and `shell` over spheres, boxes, cylinders, cones, tori, ellipsoids,
@@ -13,6 +13,11 @@ the default, 0, or a quarter to three cells. A case whose mesh `isoforge mesh --
 not call watertight and manifold with a positive volume is written to DIR (default
 target/fuzz) with the command that failed; a case that takes over 60 s is printed. Models
 with nothing inside the region are skipped. The same seed gives the same cases.
+
+With `--refine`, the meshes are refined where they miss their tolerance (docs/meshing.md,
+session 45): a third of the cases are given `--max-depth` one to three levels below their
+depth, a third no `--depth` at all (depth 8, refined where its places miss), a third are
+as without the flag; a case whose tolerance is 0 is given the default instead.
 
 Session 35 ran 937 cases with no failure (docs/meshing.md, "Not done").
 """
@@ -96,7 +101,9 @@ def main():
     ap.add_argument("--seconds", type=float, default=600)
     ap.add_argument("--out", default=os.path.join(ROOT, "target", "fuzz"))
     ap.add_argument("--isoforge", default=os.path.join(ROOT, "target", "release", "isoforge"))
+    ap.add_argument("--refine", action="store_true")
     args = ap.parse_args()
+    how = random.Random(args.seed + 1)
     if not os.access(args.isoforge, os.X_OK):
         sys.exit("no %s: cargo build --release -p isoforge-cli" % args.isoforge)
     os.makedirs(args.out, exist_ok=True)
@@ -108,13 +115,23 @@ def main():
         src, depth, tolerance = models.case()
         with open(model, "w") as f:
             f.write(src)
-        cmd = [args.isoforge, "mesh", model, "--depth", str(depth), "--json", "-q", "-o", mesh]
+        lattice = ["--depth", str(depth)]
+        if args.refine:
+            kind = how.choice(["max-depth", "default", "plain"])
+            if tolerance == 0:
+                tolerance = None
+            if kind == "max-depth":
+                lattice += ["--max-depth", str(depth + how.randint(1, 3))]
+            elif kind == "default":
+                lattice, depth = [], 8
+                tolerance = None
+        cmd = [args.isoforge, "mesh", model, *lattice, "--json", "-q", "-o", mesh]
         if tolerance is not None:
             cmd += ["--tolerance", repr(tolerance)]
         try:
             run = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
         except subprocess.TimeoutExpired:
-            print("slow (over 60 s): depth %d tolerance %s: %s" % (depth, tolerance, src[35:].strip()))
+            print("slow (over 60 s): %s tolerance %s: %s" % (" ".join(lattice) or "no --depth", tolerance, src[35:].strip()))
             continue
         cases += 1
         # An empty model is refused, not a failure: by the mesher ("nothing is inside the
@@ -129,7 +146,7 @@ def main():
         failures += 1
         path = os.path.join(args.out, "failure%d.rhai" % failures)
         with open(path, "w") as f:
-            again = "isoforge mesh %s --depth %d" % (path, depth)
+            again = "isoforge mesh %s %s" % (path, " ".join(lattice))
             if tolerance is not None:
                 again += " --tolerance %r" % tolerance
             f.write("// " + again + "\n" + src)

@@ -12,14 +12,20 @@
 //! `measured_d8` is the same mesh measured against the model on its way (the
 //! `DeviationSink` that `isoforge mesh --max-depth` puts in front of the file): its time
 //! less `d8`'s is what the measure costs.
+//!
+//! `refined_d8` is the mesh of the two bench models that miss their tolerance at depth 8,
+//! with the blocks around their misses (measured once, before the timing) sampled two
+//! levels finer, as one round of `isoforge mesh`'s refining makes it (docs/meshing.md,
+//! session 45): its time against `d8`'s is what the refinement costs.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use divan::counter::ItemsCount;
 use divan::{AllocProfiler, Bencher};
 use isoforge_field::Bounds;
 use isoforge_field::ClippedField;
-use isoforge_mesh::{DeviationSink, MeshSettings, Tally, mesh_shape_into};
+use isoforge_mesh::{DeviationSink, MeshSettings, Refinement, Tally, mesh_shape_into};
 
 #[global_allocator]
 static ALLOC: AllocProfiler = AllocProfiler::system();
@@ -52,7 +58,10 @@ fn load(rel: &str) -> Model {
 }
 
 fn run(bencher: Bencher, model: &Model, bounds: Bounds, depth: u8) {
-    let settings = MeshSettings::new(bounds, depth);
+    run_with(bencher, model, MeshSettings::new(bounds, depth));
+}
+
+fn run_with(bencher: Bencher, model: &Model, settings: MeshSettings) {
     let mesh = |settings: &MeshSettings| {
         let mut tally = Tally::around([0.0; 3]);
         match mesh_shape_into(&model.shape, settings, &mut tally) {
@@ -112,4 +121,31 @@ fn measured_d8(bencher: Bencher, name: &str) {
     bencher
         .counter(ItemsCount::new(triangles as usize))
         .bench(|| divan::black_box(measured()));
+}
+
+#[divan::bench(args = ["gyroid_sphere", "sinus_sphere"], sample_count = 2, sample_size = 1)]
+fn refined_d8(bencher: Bencher, name: &str) {
+    let model = load(&format!("bench/{name}.rhai"));
+    let Some(bounds) = model.bounds else {
+        panic!("{name}: the bench script declares its bounds")
+    };
+    let mut settings = MeshSettings::new(bounds, 8);
+    let field = ClippedField::new(&model.shape, bounds);
+    let mut sink = DeviationSink::new(
+        Tally::around([0.0; 3]),
+        &field,
+        settings.effective_tolerance(),
+    )
+    .keeping_misses(200_000);
+    if let Err(e) = mesh_shape_into(&model.shape, &settings, &mut sink) {
+        panic!("meshing failed: {e}");
+    }
+    let (_, misses, _) = sink.finish_with_misses();
+    let blocks = Refinement::blocks_near(&bounds, 8, &misses, 2.0);
+    assert!(!blocks.is_empty(), "{name} misses its tolerance at depth 8");
+    settings.refine = Some(Arc::new(Refinement {
+        levels: 2,
+        blocks: blocks.into_keys().collect(),
+    }));
+    run_with(bencher, &model, settings);
 }

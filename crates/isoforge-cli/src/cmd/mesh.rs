@@ -31,6 +31,11 @@ const AUTO_LEVELS: u8 = 3;
 /// The most fine blocks a run without `--max-depth` may add, as a multiple of its blocks.
 const AUTO_BUDGET: f64 = 3.0;
 
+/// The longest a run without `--max-depth` may spend refining, as a multiple of its plain
+/// mesh's time (at least 30 s): heart_shell, a slow field that needs three levels, takes
+/// about 20 times its plain mesh's time to hold its tolerance.
+const AUTO_SECONDS: f64 = 30.0;
+
 /// The most fine blocks `--max-depth` may add, as a multiple of the blocks: about what
 /// meshing the whole model two levels finer would cost.
 const MAX_DEPTH_BUDGET: f64 = 15.0;
@@ -81,7 +86,7 @@ const MAX_THREADS: usize = 256;
 /// depth (where a gyroid's sheet meets a ball at a grazing angle, a sliver thinner than
 /// any lattice: 0.5 % and 0.9 % of gyroid_sphere's at depths 8 and 9); a sheet thinner
 /// than a cell everywhere puts 15 % of a mesh there.
-const THIN_NOTE_SHARE: u64 = 50;
+pub(super) const THIN_NOTE_SHARE: u64 = 50;
 
 /// A usage error: message, exit status 2 (reported by `main`, with `--json` too).
 fn usage(message: String) -> Result<ExitCode> {
@@ -312,6 +317,7 @@ pub(super) fn mesh_one(
                 levels: (m - depth).min(MAX_LEVELS),
                 measure: true,
                 budget: MAX_DEPTH_BUDGET,
+                seconds: None,
             }
         }
         None => finer::Plan {
@@ -322,6 +328,7 @@ pub(super) fn mesh_one(
             },
             measure: false,
             budget: AUTO_BUDGET,
+            seconds: Some(AUTO_SECONDS),
         },
     };
     // Refining writes a mesh and may drop it for a finer one, which a pipe or a device

@@ -186,8 +186,8 @@ fn made_up_seams_keep_the_mesh_closed() {
     }
 }
 
-/// A long random sweep, by hand: `SEAM_SEEDS=2000 cargo test --release -p isoforge-mesh
-/// --lib seam_sweep -- --ignored`.
+/// A long random sweep, by hand: `SEAM_SEEDS=2000 [SEAM_FIRST=N] cargo test --release -p
+/// isoforge-mesh --lib seam_sweep -- --ignored --nocapture` (progress every 100 seeds).
 #[test]
 #[ignore]
 fn seam_sweep() {

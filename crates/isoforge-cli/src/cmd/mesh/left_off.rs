@@ -86,7 +86,8 @@ impl LeftOff {
                  splits onto the surface had to stop (a split there would fold the mesh: the \
                  surface bends or narrows within a cell or two); `isoforge check MESH \
                  --against MODEL` measures the whole mesh, and --max-depth {} or deeper \
-                 meshes finer until the tolerance holds",
+                 samples it finer where it misses until the tolerance holds (as a run given \
+                 no --depth or --resolution does)",
                 self.tolerance,
                 self.max,
                 super::point(self.at),
