@@ -216,6 +216,7 @@ pub fn polygons<'a>(
 /// sign of the edge's lower end, which sets the winding. A step from cell `q` to the next
 /// between cells of two lattices crosses a seam's fine face; `seam_face(q)` gives that
 /// face's vertex when it is ambiguous.
+#[inline]
 pub fn polygon(
     axis: usize,
     cells: [Around<'_>; 4],

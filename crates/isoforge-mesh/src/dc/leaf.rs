@@ -882,11 +882,12 @@ impl<S: Sampler> Merger<'_, '_, S> {
             }
         }
         let size = 1usize << level;
-        let touches = (0..3).any(|a| {
-            let sides = self.input.seam_sides >> (2 * a);
-            (sides & 1 == 1 && lo_cell[a] == 0)
-                || (sides & 2 == 2 && lo_cell[a] + size == self.input.grid.block)
-        });
+        let touches = self.input.seam_sides != 0
+            && (0..3).any(|a| {
+                let sides = self.input.seam_sides >> (2 * a);
+                (sides & 1 == 1 && lo_cell[a] == 0)
+                    || (sides & 2 == 2 && lo_cell[a] + size == self.input.grid.block)
+            });
         if touches {
             return None;
         }

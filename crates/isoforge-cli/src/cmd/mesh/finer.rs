@@ -103,7 +103,8 @@ pub(super) fn run(
         }
         let places = LeftOff::measure(job.loaded, &made.settings, &made.notes);
         let near = NEAR_SHARE * tolerance;
-        let misses = if places.max > near {
+        // (Measured only when they can start a refining: each is searched around.)
+        let misses = if plan.levels > 0 && places.max > near {
             beyond(&field, &places.points, near)
         } else {
             Vec::new()
