@@ -421,7 +421,7 @@ pub(super) fn mesh_one(
             .unwrap_or_default();
         let finer = refinement
             .as_ref()
-            .map(|r| format!(" ({} blocks {} levels finer)", r.blocks.len(), r.levels))
+            .map(|r| format!(" ({})", blocks_finer(r)))
             .unwrap_or_default();
         println!(
             "{}: {} triangles, {} vertices, volume {:.6}, depth {depth}{finer}, tolerance {:.3e} mm{measured}, {:.2} s",
@@ -473,6 +473,12 @@ pub(super) fn mesh_one(
         return Ok((ExitCode::from(1), made));
     }
     Ok((ExitCode::SUCCESS, made))
+}
+
+/// "30 blocks 2 levels finer": what a refinement is, for the summary line and the progress bar.
+fn blocks_finer(r: &isoforge_mesh::Refinement) -> String {
+    let s = if r.levels == 1 { "" } else { "s" };
+    format!("{} blocks {} level{s} finer", r.blocks.len(), r.levels)
 }
 
 #[cfg(test)]

@@ -76,11 +76,7 @@ pub(super) fn attempt(
     let notes = Arc::new(MeshNotes::default());
     settings.notes = Some(notes.clone());
     let what = match &settings.refine {
-        Some(r) => format!(
-            "meshing {} blocks {} levels finer",
-            r.blocks.len(),
-            r.levels
-        ),
+        Some(r) => format!("meshing {}", super::blocks_finer(r)),
         None => format!("meshing at depth {}", settings.depth),
     };
     let bar = progress_bar(global, 1000, &what);
