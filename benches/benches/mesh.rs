@@ -146,6 +146,7 @@ fn refined_d8(bencher: Bencher, name: &str) {
     settings.refine = Some(Arc::new(Refinement {
         levels: 2,
         blocks: blocks.into_keys().collect(),
+        tight_merges: false,
     }));
     run_with(bencher, &model, settings);
 }

@@ -400,6 +400,7 @@ pub(super) fn mesh_one(
                 "blocks": r.blocks.len(),
                 "of_blocks": notes.blocks.load(Ordering::Relaxed),
                 "finest_depth": depth + r.levels,
+                "tight_merges": r.tight_merges,
             });
         }
         if let Some(m) = args.max_depth {
@@ -478,7 +479,16 @@ pub(super) fn mesh_one(
 /// "30 blocks 2 levels finer": what a refinement is, for the summary line and the progress bar.
 fn blocks_finer(r: &isoforge_mesh::Refinement) -> String {
     let s = if r.levels == 1 { "" } else { "s" };
-    format!("{} blocks {} level{s} finer", r.blocks.len(), r.levels)
+    let tight = if r.tight_merges {
+        ", merged as finely"
+    } else {
+        ""
+    };
+    format!(
+        "{} blocks {} level{s} finer{tight}",
+        r.blocks.len(),
+        r.levels
+    )
 }
 
 #[cfg(test)]

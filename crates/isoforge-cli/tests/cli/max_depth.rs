@@ -290,3 +290,36 @@ fn a_device_output_is_meshed_once_and_not_refined() {
     assert!(j.get("refined").is_none(), "{j}");
     assert_eq!(j["left_off"]["tolerance_missed"], true, "{j}");
 }
+
+#[test]
+fn where_a_finer_lattice_is_not_enough_the_refined_blocks_merge_as_finely() {
+    // The spaceship's mast meets its hull's rippled underside beside a ripple sharper than
+    // a cell: the fine leaves, merged as far as the depth-8 tolerance lets coarse ones,
+    // leave chords across it. Three levels finer still miss; merged as the fine lattice's
+    // tolerance allows, the same blocks hold.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = fixtures().join("classic/spaceship.rhai");
+    let out = dir.path().join("out.stl");
+    let (made, stderr) = mesh_json(&model, &out, &[]);
+    let tolerance = made["tolerance"].as_f64().expect("tolerance");
+    let rounds = made["rounds"].as_array().expect("rounds");
+    let last = rounds.last().expect("a round");
+    let before = &rounds[rounds.len() - 2];
+    // The fault first: the round before at the finest level, merged as usual, missed.
+    assert_eq!(before["tight_merges"], false, "{made}");
+    assert_eq!(before["levels"], last["levels"], "{made}");
+    assert!(before["max_deviation"].as_f64() > Some(tolerance), "{made}");
+    // Then the same blocks merged as finely hold, and the mesh written is that one.
+    assert_eq!(last["tight_merges"], true, "{made}");
+    assert_eq!(made["refined"]["tight_merges"], true, "{made}");
+    assert_eq!(made["tolerance_held"].as_bool(), Some(true), "{made}");
+    assert!(stderr.is_empty(), "{stderr}");
+    let (c, status) = checked(&out, &model, tolerance);
+    assert_eq!(
+        (c["tolerance_held"].as_bool(), status),
+        (Some(true), Some(0)),
+        "{c}"
+    );
+    crate::sweeps::admesh_finds_nothing_to_fix_but_needles(&out, "spaceship", 1);
+    assert_eq!(names(dir.path()), ["out.stl"]);
+}

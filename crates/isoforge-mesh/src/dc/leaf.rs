@@ -80,6 +80,14 @@ impl Merging {
     pub fn on(&self) -> bool {
         self.plane > 0.0
     }
+
+    /// The same merging with both distances `k` times as large (off stays off).
+    pub fn scaled(self, k: f64) -> Merging {
+        Merging {
+            plane: self.plane * k,
+            surface: self.surface * k,
+        }
+    }
 }
 
 /// A cell with surface: its leaf's vertex, and its own face vertices.

@@ -87,10 +87,16 @@ fn random_refined_blocks_keep_the_mesh_closed() {
                 for tolerance in [Some(0.0), None] {
                     let share = [0.1, 0.3, 0.6][(seed % 3) as usize];
                     let blocks = random_blocks(&mut rng, per_side, share);
-                    let s = unit(depth, tolerance, Some(Refinement { levels, blocks }));
+                    let tight_merges = seed % 2 == 1;
+                    let refine = Refinement {
+                        levels,
+                        blocks,
+                        tight_merges,
+                    };
+                    let s = unit(depth, tolerance, Some(refine));
                     let m = mesh(f.clone(), &s, shift);
                     let what = format!(
-                        "seed {seed} depth {depth} shift {shift} levels {levels} tolerance {tolerance:?}"
+                        "seed {seed} depth {depth} shift {shift} levels {levels} tolerance {tolerance:?} tight {tight_merges}"
                     );
                     assert!(!m.triangles.is_empty(), "{what}: empty");
                     assert_closed_manifold(&m, &what);
@@ -118,6 +124,7 @@ fn refining_every_block_is_the_finer_uniform_mesh() {
                 Some(Refinement {
                     levels,
                     blocks: all,
+                    tight_merges: false,
                 }),
             ),
             shift,
@@ -140,6 +147,47 @@ fn refining_every_block_is_the_finer_uniform_mesh() {
         };
         assert_eq!(key(&refined), key(&finer), "levels {levels}");
     }
+}
+
+/// Tight merges (`Refinement::tight_merges`) merge the refined blocks' leaves no farther
+/// than the fine lattice's tolerance allows: more vertices than merges under the mesh's
+/// own tolerance, the mesh still closed and manifold; with no block refined the flag
+/// changes nothing.
+#[test]
+fn tight_merges_keep_more_leaves_in_refined_blocks() {
+    let f = field(5);
+    let (depth, shift, levels) = (4u8, 2u32, 2u8);
+    let per_side = 1i64 << (u32::from(depth) - shift);
+    let some = random_blocks(&mut Lcg(3), per_side, 0.5);
+    let with = |tight_merges: bool| {
+        let refine = Refinement {
+            levels,
+            blocks: some.clone(),
+            tight_merges,
+        };
+        mesh(f.clone(), &unit(depth, None, Some(refine)), shift)
+    };
+    let (loose, tight) = (with(false), with(true));
+    assert_closed_manifold(&loose, "loose");
+    assert_closed_manifold(&tight, "tight");
+    assert!(
+        tight.vertices.len() > loose.vertices.len(),
+        "tight merges kept {} vertices, loose {}",
+        tight.vertices.len(),
+        loose.vertices.len()
+    );
+    // With no block refined the flag changes nothing.
+    let none = |tight_merges: bool| {
+        let refine = Refinement {
+            levels,
+            blocks: HashSet::new(),
+            tight_merges,
+        };
+        mesh(f.clone(), &unit(depth, None, Some(refine)), shift)
+    };
+    let (a, b) = (none(false), none(true));
+    assert_eq!(a.vertices, b.vertices);
+    assert_eq!(a.triangles, b.triangles);
 }
 
 /// A rippled ball on a checkerboard of refined blocks: where the finer lattice sees ripples
@@ -172,6 +220,7 @@ fn made_up_seams_keep_the_mesh_closed() {
                 Some(Refinement {
                     levels,
                     blocks: checker.clone(),
+                    tight_merges: false,
                 }),
             );
             let m = mesh(f, &s, shift);
@@ -205,10 +254,16 @@ fn seam_sweep() {
         let tolerance = [Some(0.0), None, Some(0.02), Some(0.1)][(seed % 4) as usize];
         let share = rng.next();
         let blocks = random_blocks(&mut rng, per_side, share);
-        let s = unit(depth, tolerance, Some(Refinement { levels, blocks }));
+        let tight_merges = seed % 5 < 2;
+        let refine = Refinement {
+            levels,
+            blocks,
+            tight_merges,
+        };
+        let s = unit(depth, tolerance, Some(refine));
         let m = mesh(f.clone(), &s, shift);
         let what = format!(
-            "seed {seed} depth {depth} shift {shift} levels {levels} tolerance {tolerance:?} share {share:.2}"
+            "seed {seed} depth {depth} shift {shift} levels {levels} tolerance {tolerance:?} share {share:.2} tight {tight_merges}"
         );
         assert_closed_manifold(&m, &what);
     }

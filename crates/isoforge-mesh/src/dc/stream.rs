@@ -272,7 +272,10 @@ fn contour_into<S: Sampler>(
         tree: &tree,
         is_refined: &is_refined,
         coords: &coords,
-        merging,
+        merging: match &settings.refine {
+            Some(r) if r.tight_merges => merging.scaled(0.5f64.powi(levels as i32)),
+            _ => merging,
+        },
     };
 
     let own_signs = |slab: &[u32], locals: &[Option<S::Local>]| -> Vec<(u32, Vec<u64>)> {

@@ -9,7 +9,8 @@
 //! nothing when the mesh holds. Each later round
 //! refines the blocks within [`MARGIN_CELLS`] of every miss found so far, two levels finer
 //! first; when its misses are all in blocks already refined, the next round goes a level
-//! finer there. Every refined mesh is measured whole. The best mesh is kept; the others'
+//! finer there, or, at the finest level allowed, merges their leaves under the fine
+//! lattice's tolerance (one round). Every refined mesh is measured whole. The best mesh is kept; the others'
 //! temporary files are dropped.
 
 use std::collections::HashMap;
@@ -50,8 +51,9 @@ const MAX_ROUNDS: usize = 4;
 /// The fine blocks any refinement may add, whatever the model's size: a small model's
 /// budget in multiples of its own blocks is too small to refine its misses by three
 /// levels (curve_cyl has 53 blocks at depth 8, and 12 of them refined 3 levels are 768
-/// fine blocks). As many as a depth-8 mesh of a ball has blocks.
-const BUDGET_FLOOR: f64 = 1024.0;
+/// fine blocks; spaceship has 99, and its 29 that miss refined 3 levels are 1,856). The
+/// rounds' time limit bounds what they cost.
+const BUDGET_FLOOR: f64 = 4096.0;
 
 /// How far the mesh may be refined.
 #[derive(Clone, Copy, Debug)]
@@ -143,6 +145,7 @@ pub(super) fn run(
     let mut wanted: HashMap<[i64; 3], f64> = HashMap::new();
     let mut refined = false;
     let mut levels = FIRST_LEVELS.min(plan.levels);
+    let mut tight = false;
     let mut last: Option<Refinement> = None;
     let first_seconds = began.elapsed().as_secs_f64();
     // The last round's seconds per fine block, to foresee the next one's.
@@ -160,12 +163,18 @@ pub(super) fn run(
             // blocks gives back the misses the others had held: spaceship at three levels
             // on 23 blocks missed by 3.10 tolerances where two levels on 29 gave 2.43).
             let finer = wanted.len() as f64 * fine_blocks_per_block(levels + 1);
-            if levels >= plan.levels || finer > budget {
+            if levels < plan.levels && finer <= budget {
+                levels += 1;
+            } else if !tight {
+                // No finer lattice: the same blocks once more with their leaves merged as
+                // the fine lattice's tolerance allows (`Refinement::tight_merges`).
+                tight = true;
+            } else {
                 break;
             }
-            levels += 1;
         }
-        let refinement = within_budget(&wanted, levels, budget);
+        let mut refinement = within_budget(&wanted, levels, budget);
+        refinement.tight_merges = tight;
         if last.as_ref() == Some(&refinement) {
             break;
         }
@@ -246,6 +255,7 @@ fn within_budget(wanted: &HashMap<[i64; 3], f64>, levels: u8, budget: f64) -> Re
     Refinement {
         levels,
         blocks: order.into_iter().take(fits).map(|(b, _)| *b).collect(),
+        tight_merges: false,
     }
 }
 
@@ -259,6 +269,7 @@ fn round_json(
     json!({
         "levels": refinement.map_or(0, |r| r.levels),
         "blocks_refined": refinement.map_or(0, |r| r.blocks.len()),
+        "tight_merges": refinement.is_some_and(|r| r.tight_merges),
         "triangles": made.report.tally.triangles,
         "max_deviation": made.deviation.map(|d| d.max),
         "misses": misses.len(),
