@@ -422,7 +422,7 @@ pub(super) fn mesh_one(
             .unwrap_or_default();
         let finer = refinement
             .as_ref()
-            .map(|r| format!(" ({})", blocks_finer(r)))
+            .map(|r| format!(" ({})", blocks_finer(r, depth)))
             .unwrap_or_default();
         println!(
             "{}: {} triangles, {} vertices, volume {:.6}, depth {depth}{finer}, tolerance {:.3e} mm{measured}, {:.2} s",
@@ -476,13 +476,14 @@ pub(super) fn mesh_one(
     Ok((ExitCode::SUCCESS, made))
 }
 
-/// "30 blocks 2 levels finer": what a refinement is, for the summary line and the progress bar.
-fn blocks_finer(r: &isoforge_mesh::Refinement) -> String {
+/// "30 blocks 2 levels finer": what a refinement of a mesh at `depth` is, for the summary
+/// line and the progress bar.
+fn blocks_finer(r: &isoforge_mesh::Refinement, depth: u8) -> String {
     let s = if r.levels == 1 { "" } else { "s" };
     let tight = if r.tight_merges {
-        ", merged as finely"
+        format!(", their cells merged as at depth {}", depth + r.levels)
     } else {
-        ""
+        String::new()
     };
     format!(
         "{} blocks {} level{s} finer{tight}",

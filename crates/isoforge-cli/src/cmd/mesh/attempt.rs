@@ -76,7 +76,7 @@ pub(super) fn attempt(
     let notes = Arc::new(MeshNotes::default());
     settings.notes = Some(notes.clone());
     let what = match &settings.refine {
-        Some(r) => format!("meshing {}", super::blocks_finer(r)),
+        Some(r) => format!("meshing {}", super::blocks_finer(r, settings.depth)),
         None => format!("meshing at depth {}", settings.depth),
     };
     let bar = progress_bar(global, 1000, &what);
